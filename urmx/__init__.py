@@ -1,0 +1,33 @@
+"""urmx: out-of-plane rocking of cracked URM walls between flexible timber diaphragms.
+
+Public API (heavy modules are imported on first use)::
+
+    from urmx import Wall, simulate, run_study, open_study
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .config import UrmxWarning
+from .model import Wall
+
+try:
+    __version__ = version("urmx")
+except PackageNotFoundError:  # pragma: no cover - running from a bare source tree
+    __version__ = "0.0.0+unknown"
+
+__all__ = ["Wall", "simulate", "run_study", "open_study", "UrmxWarning", "__version__"]
+
+_LAZY = {
+    "simulate": ("urmx.simulate", "simulate"),
+    "run_study": ("urmx.study", "run_study"),
+    "open_study": ("urmx.study", "open_study"),
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        return getattr(importlib.import_module(module), attr)
+    raise AttributeError(f"module 'urmx' has no attribute {name!r}")

@@ -1,0 +1,369 @@
+"""The wall model of ``shared/design/MODEL.md`` sections 1-6.
+
+`Wall` is the immutable, validated description of one wall and its two supports.
+Everything the integrators need is packed into a flat float64 parameter vector
+(`Wall.params`) so that the numba kernel and the scipy reference solver call the
+*same* builders below (one matrix builder for all four rocking patterns and all four
+support cases).
+
+Conventions (MODEL.md section 1): generalised coordinates ``q = [theta1, theta2, u_b]``;
+a rigid support removes a degree of freedom through ``q = T r`` (section 6).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+from typing import Any, NamedTuple
+
+import numpy as np
+from numba import njit
+
+G = 9.81  # m/s2, the value the paper's Table III uses (MODEL.md section 1)
+RIGID = "rigid"
+
+# ---- layout of the parameter vector ------------------------------------------------
+P_B, P_H, P_A1, P_A2, P_M1, P_M2, P_MDB, P_MDT = range(8)
+P_KDB, P_KDT, P_CB, P_CT, P_G, P_RIGID_B, P_RIGID_T, P_KAPPA, P_PMR = range(8, 17)
+P_CASE = 17  # case k (1, 2, 3) occupies P_CASE + 5*(k-1) .. +4: M0, theta0, Mi, theta_a, theta_b
+N_PARAMS = P_CASE + 15
+
+
+class Segment(NamedTuple):
+    """Trilinear resistance of one segment case (Table I, Fig. 2)."""
+
+    M0: float  # rigid bilinear strength [N m]
+    theta0: float  # instability rotation [rad]
+    Mi: float  # plateau strength 0.009*PMR*M0 [N m]
+    theta_a: float  # end of the initial linear branch, kappa*theta0 [rad]
+    theta_b: float  # start of the softening branch, theta0*(1 - Mi/M0) [rad]
+
+
+def _is_rigid(value: Any) -> bool:
+    return isinstance(value, str) and value.strip().lower() == RIGID
+
+
+@dataclass(frozen=True)
+class Wall:
+    """One cracked URM wall and its bottom and top supports (MODEL.md sections 1-3).
+
+    Parameters
+    ----------
+    thickness : float
+        Wall thickness b. [m]
+    height : float
+        Wall (storey) height h. [m]
+    crack_ratio : float
+        Crack height over wall height, eta = a1/h, in (0, 1). [1]
+    mass : float
+        Wall mass m (effective for building walls, nominal for test specimens). [kg]
+    bottom_mass, top_mass : float
+        Effective masses of the bottom and top diaphragms. [kg]
+    bottom_stiffness, top_stiffness : float or "rigid"
+        Effective in-plane stiffness of the supports. ``"rigid"`` removes the degree of
+        freedom (a constraint, MODEL.md section 6), it is not a stiff spring. [N m-1]
+    bottom_damping, top_damping : float
+        Viscous damping ratios of dashpots beside the diaphragm springs. [1]
+    pmr : float
+        Percentage of maximum rigid resistance, in (0, 100]. [%]
+    kappa : float
+        theta_a / theta0 of the trilinear curve. [1]
+    """
+
+    thickness: float
+    height: float
+    crack_ratio: float
+    mass: float
+    bottom_mass: float = 0.0
+    top_mass: float = 0.0
+    bottom_stiffness: float | str = RIGID
+    top_stiffness: float | str = RIGID
+    bottom_damping: float = 0.0
+    top_damping: float = 0.0
+    pmr: float = 75.0
+    kappa: float = 0.04
+    _params: np.ndarray = field(init=False, repr=False, compare=False, hash=False)
+
+    def __post_init__(self) -> None:
+        def number(name: str, *, positive: bool = False, allow_rigid: bool = False) -> None:
+            value = getattr(self, name)
+            if allow_rigid and _is_rigid(value):
+                object.__setattr__(self, name, RIGID)
+                return
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
+                                                                   np.integer)):
+                hint = ' (a number or "rigid")' if allow_rigid else " (a number)"
+                raise ValueError(f"Wall {name}={value!r} is not valid{hint}")
+            value = float(value)
+            if not math.isfinite(value):
+                raise ValueError(f"Wall {name}={value!r} must be a finite number")
+            if positive and value <= 0.0:
+                raise ValueError(f"Wall {name}={value!r} must be greater than zero")
+            if not positive and value < 0.0:
+                raise ValueError(f"Wall {name}={value!r} must not be negative")
+            object.__setattr__(self, name, value)
+
+        for name in ("thickness", "height", "mass"):
+            number(name, positive=True)
+        for name in ("bottom_mass", "top_mass", "bottom_damping", "top_damping"):
+            number(name)
+        for name in ("bottom_stiffness", "top_stiffness"):
+            number(name, positive=True, allow_rigid=True)
+        number("crack_ratio", positive=True)
+        if not 0.0 < self.crack_ratio < 1.0:
+            raise ValueError(f"Wall crack_ratio={self.crack_ratio!r} must lie in (0, 1)")
+        number("pmr", positive=True)
+        if not 0.0 < self.pmr <= 100.0:
+            raise ValueError(f"Wall pmr={self.pmr!r} must lie in (0, 100] (percent)")
+        number("kappa", positive=True)
+        limit = 1.0 - 0.009 * self.pmr
+        if self.kappa >= limit:
+            raise ValueError(
+                f"Wall kappa={self.kappa!r} puts theta_a at or beyond theta_b "
+                f"(with pmr={self.pmr:g} kappa must be below 1 - 0.009*pmr = {limit:.4g})"
+            )
+        object.__setattr__(self, "_params", _pack(self))
+
+    # ---- derived quantities ---------------------------------------------------------
+    @property
+    def a1(self) -> float:
+        """Height of the lower segment, eta*h. [m]"""
+        return self.crack_ratio * self.height
+
+    @property
+    def a2(self) -> float:
+        """Height of the upper segment, h - a1. [m]"""
+        return self.height - self.a1
+
+    @property
+    def bottom_rigid(self) -> bool:
+        return self.bottom_stiffness == RIGID
+
+    @property
+    def top_rigid(self) -> bool:
+        return self.top_stiffness == RIGID
+
+    @property
+    def slenderness(self) -> float:
+        return self.height / self.thickness
+
+    @property
+    def params(self) -> np.ndarray:
+        """Flat float64 parameter vector used by the kernel and the reference solver."""
+        return self._params
+
+    def segment(self, case: int) -> Segment:
+        """Trilinear data of segment case 1 (upper), 2 (lower, family 2) or 3 (lower,
+        family 1), MODEL.md section 3 / the paper's Tables I and III."""
+        if case not in (1, 2, 3):
+            raise ValueError(f"segment case must be 1, 2 or 3, not {case!r}")
+        i = P_CASE + 5 * (case - 1)
+        return Segment(*(float(v) for v in self._params[i : i + 5]))
+
+    def diaphragm_frequency(self, where: str = "top") -> float:
+        """Indicative frequency of a diaphragm as an SDOF (Table IV footnote):
+        stiffness over (diaphragm mass + half the wall mass). [Hz]"""
+        k = self.top_stiffness if where == "top" else self.bottom_stiffness
+        md = self.top_mass if where == "top" else self.bottom_mass
+        if k == RIGID:
+            return math.inf
+        return math.sqrt(k / (md + 0.5 * self.mass)) / (2.0 * math.pi)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d.pop("_params", None)
+        return d
+
+    def replace(self, **changes: Any) -> Wall:
+        d = self.to_dict()
+        d.update(changes)
+        return Wall(**d)
+
+
+def _pack(w: Wall) -> np.ndarray:
+    p = np.zeros(N_PARAMS)
+    b, h = w.thickness, w.height
+    a1 = w.crack_ratio * h
+    a2 = h - a1
+    m1 = w.mass * a1 / h
+    m2 = w.mass * a2 / h
+    mdb, mdt = w.bottom_mass, w.top_mass
+    rb, rt = w.bottom_stiffness == RIGID, w.top_stiffness == RIGID
+    kdb = 0.0 if rb else float(w.bottom_stiffness)
+    kdt = 0.0 if rt else float(w.top_stiffness)
+    # dashpots beside the springs (MODEL.md section 5)
+    cb = 0.0 if rb else 2.0 * w.bottom_damping * math.sqrt(kdb * (mdb + 0.5 * w.mass))
+    ct = 0.0 if rt else 2.0 * w.top_damping * math.sqrt(kdt * (mdt + 0.5 * w.mass))
+    p[:P_CASE] = (b, h, a1, a2, m1, m2, mdb, mdt, kdb, kdt, cb, ct, G, float(rb), float(rt),
+                  w.kappa, w.pmr)
+    # Table I, specific forms (MODEL.md section 3)
+    cases = (
+        ((0.5 * m2 + 0.5 * mdt) * b * G, b / (2 * a2) * (m2 + mdt) / (0.5 * m2 + mdt)),
+        ((0.5 * m1 + m2 + mdt) * b * G, b / a1),
+        (0.5 * m1 * b * G, b / (2 * a1) * m1 / (0.5 * m1 + m2 + mdt)),
+    )
+    for k, (M0, theta0) in enumerate(cases):
+        Mi = 0.009 * w.pmr * M0
+        p[P_CASE + 5 * k : P_CASE + 5 * k + 5] = (
+            M0, theta0, Mi, w.kappa * theta0, theta0 * (1.0 - Mi / M0))
+    return p
+
+
+# ---- numba builders shared by the kernel and the reference solver ----------------------
+
+@njit(cache=True)
+def lower_case(family):
+    """Segment case of the lower segment: Case 3 in family 1, Case 2 in family 2."""
+    return 3 if family == 1 else 2
+
+
+@njit(cache=True)
+def curve(P, case):
+    """(M0, theta0, Mi, theta_a, theta_b) of a segment case."""
+    i = P_CASE + 5 * (case - 1)
+    return P[i], P[i + 1], P[i + 2], P[i + 3], P[i + 4]
+
+
+@njit(cache=True)
+def branch_coeffs(P, case, branch):
+    """Resistance on a signed branch as R = k*theta + r0, each branch continued smoothly.
+
+    branch 0: |theta| <= theta_a (slope Mi/theta_a); +-1: plateau +-Mi;
+    +-2: softening M0*sign*(1 - |theta|/theta0), slope -M0/theta0 (the paper's K_G).
+    """
+    M0, theta0, Mi, ta, tb = curve(P, case)
+    if branch == 0:
+        return Mi / ta, 0.0
+    sgn = 1.0 if branch > 0 else -1.0
+    if abs(branch) == 1:
+        return 0.0, sgn * Mi
+    return -M0 / theta0, sgn * M0
+
+
+@njit(cache=True)
+def resistance(P, case, theta):
+    """Trilinear resistance R(theta) (MODEL.md section 3). [N m]"""
+    M0, theta0, Mi, ta, tb = curve(P, case)
+    a = abs(theta)
+    s = 1.0 if theta >= 0 else -1.0
+    if a <= ta:
+        return Mi * theta / ta
+    if a <= tb:
+        return s * Mi
+    return s * M0 * (1.0 - a / theta0)
+
+
+@njit(cache=True)
+def potential(P, case, theta):
+    """Strain energy of the trilinear curve, integral of R from 0 to theta. [J]"""
+    M0, theta0, Mi, ta, tb = curve(P, case)
+    a = abs(theta)
+    if a <= ta:
+        return 0.5 * Mi * a * a / ta
+    e = 0.5 * Mi * ta
+    if a <= tb:
+        return e + Mi * (a - ta)
+    e += Mi * (tb - ta)
+    return e + M0 * ((a - tb) - 0.5 * (a * a - tb * tb) / theta0)
+
+
+@njit(cache=True)
+def classify(P, case, theta, rate):
+    """Signed branch of theta on a curve; on a boundary the side it is moving to wins."""
+    M0, theta0, Mi, ta, tb = curve(P, case)
+    a = abs(theta)
+    tol = 1e-13 * theta0
+    s = 1 if theta > 0 else -1
+    if theta == 0.0:
+        return 0
+    outward = rate * s > 0
+    if a < ta - tol or (a <= ta + tol and not outward):
+        return 0
+    if a < tb - tol or (a <= tb + tol and not outward):
+        return s
+    return 2 * s
+
+
+@njit(cache=True)
+def n_dof(P):
+    return 3 - int(P[P_RIGID_B]) - int(P[P_RIGID_T])
+
+
+@njit(cache=True)
+def transform(P):
+    """q = T r for the support case (MODEL.md section 6 table)."""
+    rb = P[P_RIGID_B] > 0.5
+    rt = P[P_RIGID_T] > 0.5
+    a1, a2 = P[P_A1], P[P_A2]
+    n = n_dof(P)
+    T = np.zeros((3, n))
+    if not rb and not rt:
+        T[0, 0] = T[1, 1] = T[2, 2] = 1.0
+    elif rb and not rt:
+        T[0, 0] = T[1, 1] = 1.0
+    elif rt and not rb:
+        T[0, 0] = T[1, 1] = 1.0
+        T[2, 0] = -a1
+        T[2, 1] = -a2
+    else:
+        T[0, 0] = 1.0
+        T[1, 0] = -a1 / a2
+    return T
+
+
+@njit(cache=True)
+def full_mass(P, family):
+    """M_f of Eq. 1 (family 1) or Eq. 2 (family 2), with M13 from the Lagrangian (sec. 9)."""
+    b, a1, a2 = P[P_B], P[P_A1], P[P_A2]
+    m1, m2, mdb, mdt = P[P_M1], P[P_M2], P[P_MDB], P[P_MDT]
+    Io1 = m1 * (a1 * a1 + b * b) / 3.0
+    Io2 = m2 * (a2 * a2 + b * b) / 3.0
+    M = np.zeros((3, 3))
+    if family == 1:
+        M[0, 0] = Io1 + (m2 + mdt) * a1 * a1
+        M[0, 1] = a1 * a2 * (0.5 * m2 + mdt)
+    else:
+        M[0, 0] = Io1 + (m2 + mdt) * (b * b + a1 * a1)
+        M[0, 1] = a1 * a2 * (0.5 * m2 + mdt) - (m2 + mdt) * b * b / 2.0
+    M[0, 2] = (0.5 * m1 + m2 + mdt) * a1
+    M[1, 1] = Io2 + mdt * (0.25 * b * b + a2 * a2)
+    M[1, 2] = (0.5 * m2 + mdt) * a2
+    M[2, 2] = m1 + m2 + mdb + mdt
+    M[1, 0] = M[0, 1]
+    M[2, 0] = M[0, 2]
+    M[2, 1] = M[1, 2]
+    return M
+
+
+@njit(cache=True)
+def system(P, family, bl, bu):
+    """Reduced matrices of one piece (family, lower branch, upper branch).
+
+    Returns M, C, K, R0, MinvG, Minv with the reduced equation
+    ``M r_dd + C r_d + K r + R0 = -G xg_dd`` (G = T^T M_f[:, 2]) and MinvG = M^-1 G.
+    With both supports flexible MinvG is e3 exactly (MODEL.md section 5).
+    """
+    T = transform(P)
+    a1, a2 = P[P_A1], P[P_A2]
+    Mf = full_mass(P, family)
+    v = np.array([a1, a2, 1.0])
+    e3 = np.array([0.0, 0.0, 1.0])
+    KD = P[P_KDT] * np.outer(v, v) + P[P_KDB] * np.outer(e3, e3)
+    Cq = P[P_CT] * np.outer(v, v) + P[P_CB] * np.outer(e3, e3)
+    k1, r1 = branch_coeffs(P, lower_case(family), bl)
+    k2, r2 = branch_coeffs(P, 1, bu)
+    KD[0, 0] += k1
+    KD[1, 1] += k2
+    R0q = np.array([r1, r2, 0.0])
+    M = T.T @ Mf @ T
+    C = T.T @ Cq @ T
+    K = T.T @ KD @ T
+    R0 = T.T @ R0q
+    Gv = T.T @ Mf[:, 2]
+    Minv = np.linalg.inv(M)
+    if T.shape[1] == 3:
+        MinvG = e3.copy()
+    else:
+        MinvG = Minv @ Gv
+    return M, C, K, R0, MinvG, Minv

@@ -1,0 +1,52 @@
+"""The registry of output variables (``variables.toml``) and the helper that stamps it."""
+
+from __future__ import annotations
+
+import sys
+from functools import lru_cache
+from importlib import resources
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SCALARS = (
+    "peak_crack_displacement", "peak_top_displacement", "peak_base_displacement",
+    "peak_lower_drift", "peak_upper_drift", "peak_top_acceleration",
+    "peak_crack_acceleration", "peak_base_acceleration", "instability_ratio_lower",
+    "instability_ratio_upper", "instability_ratio", "collapsed", "collapse_time",
+    "unfavourable_fraction", "base_impacts", "crack_impacts",
+)
+INTEGER_SCALARS = ("collapsed", "base_impacts", "crack_impacts")
+HISTORIES = (
+    "theta_lower", "theta_upper", "base_displacement", "crack_displacement",
+    "top_displacement", "base_acceleration", "crack_acceleration", "top_acceleration",
+    "pattern",
+)
+
+
+@lru_cache(maxsize=1)
+def registry() -> dict[str, dict[str, str]]:
+    """name -> {units, long_name, description}."""
+    text = resources.files("urmx").joinpath("variables.toml").read_text(encoding="utf-8")
+    return tomllib.loads(text)
+
+
+def attrs(name: str) -> dict[str, str]:
+    """CF attributes (units, long_name, description) of a registered variable."""
+    try:
+        entry = registry()[name]
+    except KeyError:
+        raise KeyError(f"{name!r} is not in urmx's variable registry") from None
+    return {"units": entry["units"], "long_name": entry["long_name"],
+            "description": entry.get("description", "")}
+
+
+def stamp(ds):
+    """Set units/long_name/description on every registered variable of an xarray object."""
+    reg = registry()
+    for name in list(ds.variables):
+        if name in reg:
+            ds[name].attrs.update(attrs(name))
+    return ds

@@ -1,0 +1,769 @@
+"""The catalog: walls, diaphragms, the parametric building and study files (``catalog/*.toml``).
+
+Data lives in the top-level ``catalog/`` folder, never in code:
+
+- ``walls.toml``: the Table II test walls with their own supports and PMR;
+- ``diaphragms.toml``: D1-D5 of Table IV (D5 ``rigid``);
+- ``building.toml``: the parametric building (plan, density, diaphragm weight, wall length)
+  and the parametric wall family (230 mm, slenderness 8-24, crack at 2/3, PMR 75);
+- ``studies/*.toml``: study grids (`load_study`).
+
+A study file may also define its own walls (``[walls.<id>]``) and diaphragms
+(``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. Every error names the
+file, the key and (where it can be found) the line.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .config import project_root
+from .model import RIGID, G, Wall
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+EFFECTIVE_MASS = 8.0 / 15.0  # Eq. 7: effective over nominal mass of walls and diaphragms
+SPECIMEN = "specimen"  # the diaphragm id meaning "the wall's own supports" (test walls)
+SUPPORTS = ("top", "both", SPECIMEN)
+IMPACT_LAWS = ("scale", "contact")
+WALL_FIELDS = ("thickness", "height", "crack_ratio", "mass", "bottom_mass", "top_mass",
+               "bottom_stiffness", "top_stiffness", "bottom_damping", "top_damping", "pmr",
+               "kappa")
+# dimensions of a study's grid, in order; the last three are optional (study keys)
+DIMS = ("wall", "diaphragm", "record", "cor", "scale", "impact", "damping")
+
+
+class CatalogError(ValueError):
+    """A catalog or study file is invalid; the message names the file, key and line."""
+
+
+def catalog_dir(path: str | os.PathLike | None = None) -> Path:
+    """The catalog folder: `path`, else ``catalog/`` of the source checkout."""
+    return Path(path) if path is not None else project_root() / "catalog"
+
+
+# ---- locating keys in TOML text for error messages -------------------------------------
+
+class _Source:
+    """A parsed TOML file that can point at the line of a key or value."""
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        try:
+            self.text = self.path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise FileNotFoundError(f"{self.path}: no such file") from None
+        try:
+            self.data = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError as exc:
+            raise CatalogError(f"{self.path}: not valid TOML: {exc}") from None
+
+    def line(self, *needles: str) -> int | None:
+        """First line holding the last needle after the lines holding the earlier ones."""
+        lines = self.text.splitlines()
+        start = 0
+        found = None
+        for needle in needles:
+            pat = re.compile(r"(^|[^\w-])" + re.escape(str(needle)) + r"($|[^\w-])")
+            for i in range(start, len(lines)):
+                code = lines[i].split("#", 1)[0]
+                if pat.search(code):
+                    found, start = i + 1, i
+                    break
+            else:
+                return found
+        return found
+
+    def error(self, key: str, message: str, *needles: str) -> CatalogError:
+        line = self.line(*(needles or key.split(".")))
+        where = f"{self.path}:{line}" if line else str(self.path)
+        return CatalogError(f"{where}: {key}: {message}")
+
+
+# ---- catalog items ----------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Diaphragm:
+    """A timber diaphragm of Table IV.
+
+    Parameters
+    ----------
+    id : str
+        Catalog id (``D1`` ... ``D5``).
+    stiffness : float or "rigid"
+        Effective in-plane stiffness used in the analyses. [N m-1]
+    damping : float
+        Viscous damping ratio of the dashpot beside the spring. [1]
+    table_stiffness : float
+        Stiffness printed in Table IV (1e9 for D5), used by the calibration. [N m-1]
+    frequency_range : tuple of float
+        Table IV's indicative frequency range. [Hz]
+    """
+
+    id: str
+    stiffness: float | str
+    damping: float = 0.12
+    table_stiffness: float = math.nan
+    frequency_range: tuple[float, float] = (math.nan, math.nan)
+    description: str = ""
+    direction: str = ""
+
+    @property
+    def rigid(self) -> bool:
+        return self.stiffness == RIGID
+
+    @property
+    def stiffness_value(self) -> float:
+        """Stiffness as a number, inf when rigid. [N m-1]"""
+        return math.inf if self.rigid else float(self.stiffness)
+
+
+@dataclass(frozen=True)
+class WallSpec:
+    """A catalog wall: a `Wall` template plus its id and metadata.
+
+    Parametric walls carry only the wall itself (their supports come from the study's
+    diaphragm); test walls carry their own supports (diaphragm ``specimen``).
+    """
+
+    id: str
+    wall: Wall
+    name: str = ""
+    source: str = ""
+    records: tuple[str, ...] = ()
+    parametric: bool = False
+
+    @property
+    def slenderness(self) -> float:
+        return self.wall.slenderness
+
+
+@dataclass(frozen=True)
+class Building:
+    """The parametric building of Section 6 (``catalog/building.toml``).
+
+    Parameters
+    ----------
+    plan : tuple of float
+        Plan dimensions. [m]
+    density : float
+        Masonry density. [kg m-3]
+    wall_length : float
+        Length of each of the two out-of-plane walls. [m]
+    diaphragm_weight : float
+        Diaphragm seismic weight per plan area. [kPa]
+    """
+
+    plan: tuple[float, float]
+    density: float
+    wall_length: float
+    diaphragm_weight: float
+
+    @property
+    def plan_area(self) -> float:
+        return self.plan[0] * self.plan[1]
+
+    def wall_mass(self, thickness: float, height: float) -> float:
+        """Effective wall mass, Eq. 7: 8/15 of both out-of-plane walls' mass. [kg]"""
+        return EFFECTIVE_MASS * 2.0 * self.density * thickness * height * self.wall_length
+
+    @property
+    def diaphragm_mass(self) -> float:
+        """Effective diaphragm mass, Eq. 7: 8/15 of its seismic weight over g. [kg]"""
+        return EFFECTIVE_MASS * self.diaphragm_weight * 1e3 * self.plan_area / G
+
+    def replace(self, **changes: Any) -> Building:
+        d = dict(plan=self.plan, density=self.density, wall_length=self.wall_length,
+                 diaphragm_weight=self.diaphragm_weight)
+        d.update(changes)
+        return Building(**d)
+
+
+@dataclass
+class Catalog:
+    """Everything in ``catalog/``: walls (test and parametric), diaphragms, building."""
+
+    walls: dict[str, WallSpec]
+    diaphragms: dict[str, Diaphragm]
+    building: Building
+    calibration: dict[str, Any] = field(default_factory=dict)
+    path: Path | None = None
+
+    @property
+    def parametric_walls(self) -> list[str]:
+        return [k for k, w in self.walls.items() if w.parametric]
+
+
+def _wall_from_table(src: _Source, key: str, table: dict, **extra: Any) -> Wall:
+    unknown = set(table) - set(WALL_FIELDS) - {"name", "source", "records"}
+    if unknown:
+        name = sorted(unknown)[0]
+        raise src.error(f"{key}.{name}", f"unknown wall field (known: {', '.join(WALL_FIELDS)})",
+                        key.split(".")[-1], name)
+    values = {k: table[k] for k in WALL_FIELDS if k in table}
+    values.update(extra)
+    try:
+        return Wall(**values)
+    except (TypeError, ValueError) as exc:
+        bad = next((k for k in WALL_FIELDS if k in str(exc)), None)
+        needles = (key.split(".")[-1], bad) if bad else (key.split(".")[-1],)
+        raise src.error(key + (f".{bad}" if bad else ""), str(exc), *needles) from None
+
+
+def _diaphragm_from_table(src: _Source, key: str, ident: str, t: dict) -> Diaphragm:
+    if "stiffness" not in t:
+        raise src.error(f"{key}.stiffness", "missing", ident)
+    k = t["stiffness"]
+    if isinstance(k, str):
+        if k.strip().lower() != RIGID:
+            raise src.error(f"{key}.stiffness", f'{k!r} is not a number or "rigid"', ident,
+                            "stiffness")
+        k = RIGID
+    elif isinstance(k, bool) or not isinstance(k, (int, float)) or not math.isfinite(k) \
+            or k <= 0:
+        raise src.error(f"{key}.stiffness", f"{k!r} must be a positive number [N m-1] or "
+                        '"rigid"', ident, "stiffness")
+    damping = t.get("damping", 0.12)
+    if isinstance(damping, bool) or not isinstance(damping, (int, float)) or damping < 0:
+        raise src.error(f"{key}.damping", f"{damping!r} must be a ratio >= 0", ident, "damping")
+    fr = t.get("frequency_range", (math.nan, math.nan))
+    return Diaphragm(id=ident, stiffness=k if k == RIGID else float(k), damping=float(damping),
+                     table_stiffness=float(t.get("table_stiffness", math.nan)),
+                     frequency_range=(float(fr[0]), float(fr[1])),
+                     description=t.get("description", ""), direction=t.get("direction", ""))
+
+
+def parametric_wall_id(slenderness: float) -> str:
+    """Id of a parametric wall: ``s`` + the slenderness on two digits (``s18``)."""
+    return f"s{int(round(slenderness)):02d}"
+
+
+def load_catalog(path: str | os.PathLike | None = None) -> Catalog:
+    """Load ``walls.toml``, ``diaphragms.toml`` and ``building.toml`` of a catalog folder."""
+    root = catalog_dir(path)
+    bsrc = _Source(root / "building.toml")
+    b = bsrc.data.get("building", {})
+    try:
+        building = Building(plan=tuple(float(x) for x in b["plan"]), density=float(b["density"]),
+                            wall_length=float(b["wall_length"]),
+                            diaphragm_weight=float(b["diaphragm_weight"]))
+    except KeyError as exc:
+        raise bsrc.error(f"building.{exc.args[0]}", "missing", "building") from None
+    walls: dict[str, WallSpec] = {}
+    pw = bsrc.data.get("parametric_walls", {})
+    for s in pw.get("slenderness", []):
+        t = float(pw["thickness"])
+        h = round(s * t, 10)
+        ident = parametric_wall_id(s)
+        wall = _wall_from_table(bsrc, "parametric_walls", {}, thickness=t, height=h,
+                                crack_ratio=float(pw["crack_ratio"]), pmr=float(pw["pmr"]),
+                                mass=building.wall_mass(t, h))
+        walls[ident] = WallSpec(ident, wall, name=f"slenderness {s:g}",
+                                source="paper Section 6 (parametric)", parametric=True)
+    wsrc = _Source(root / "walls.toml")
+    for ident, t in wsrc.data.items():
+        walls[ident] = _wall_spec(wsrc, ident, t)
+    dsrc = _Source(root / "diaphragms.toml")
+    diaphragms = {ident: _diaphragm_from_table(dsrc, ident, ident, t)
+                  for ident, t in dsrc.data.items()}
+    return Catalog(walls, diaphragms, building, dict(bsrc.data.get("calibration", {})), root)
+
+
+def _wall_spec(src: _Source, ident: str, t: dict, key: str | None = None) -> WallSpec:
+    key = key or ident
+    if not isinstance(t, dict):
+        raise src.error(key, "must be a table of wall fields", ident)
+    wall = _wall_from_table(src, key, t)
+    return WallSpec(ident, wall, name=t.get("name", ident), source=t.get("source", str(src.path)),
+                    records=tuple(t.get("records", ())))
+
+
+# ---- studies -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class History:
+    """One cell whose time histories are kept."""
+
+    wall: str
+    diaphragm: str
+    record: str
+    cor: float
+
+    @property
+    def label(self) -> str:
+        return f"{self.wall}/{self.diaphragm}/{self.record}/cor{self.cor:g}"
+
+
+@dataclass
+class Study:
+    """A study grid read from a TOML file (`load_study`).
+
+    ``dims`` maps every grid dimension (``wall``, ``diaphragm``, ``record``, ``cor`` and any
+    of ``scale``, ``impact``, ``damping`` the file adds) to its values, in `DIMS` order.
+    """
+
+    name: str
+    title: str
+    path: Path | None
+    text: str
+    catalog: Catalog
+    walls: list[WallSpec]
+    diaphragms: list[Diaphragm]
+    supports: str
+    records: list[str]
+    cor: list[float]
+    extra: dict[str, list]  # added dimensions: scale, impact, damping
+    impact: str = "scale"
+    tail: float = 0.0
+    scale_factor: dict[str, float] = field(default_factory=dict)
+    pairs: dict[str, list[str]] | None = None
+    histories: list[History] = field(default_factory=list)
+    _src: Any = field(default=None, repr=False)
+
+    @property
+    def dims(self) -> dict[str, list]:
+        d = {"wall": [w.id for w in self.walls], "diaphragm": [d.id for d in self.diaphragms],
+             "record": list(self.records), "cor": list(self.cor)}
+        d.update(self.extra)
+        return d
+
+    @property
+    def size(self) -> int:
+        """Number of analyses run (cells the pairs exclude are not counted)."""
+        n = math.prod(len(v) for k, v in self.dims.items() if k not in ("wall", "record"))
+        return n * sum(1 for w in self.walls for r in self.records if self.paired(w.id, r))
+
+    def paired(self, wall: str, record: str) -> bool:
+        return self.pairs is None or record in self.pairs.get(wall, ())
+
+    def wall(self, spec: WallSpec, diaphragm: Diaphragm, damping: float | None = None) -> Wall:
+        """The `Wall` of one cell: a catalog wall on a diaphragm as the study's supports say.
+
+        ``damping`` (the study's ``damping`` dimension) replaces the damping ratio of every
+        flexible support.
+        """
+        if self.supports == SPECIMEN:
+            w = spec.wall
+            if damping is not None:
+                w = w.replace(bottom_damping=0.0 if w.bottom_rigid else damping,
+                              top_damping=0.0 if w.top_rigid else damping)
+            return w
+        md = self.catalog.building.diaphragm_mass
+        zeta = diaphragm.damping if damping is None else damping
+        zeta = 0.0 if diaphragm.rigid else zeta
+        top = dict(top_stiffness=diaphragm.stiffness, top_mass=md, top_damping=zeta)
+        if self.supports == "top":  # single storey: the ground is the rigid bottom support
+            bottom = dict(bottom_stiffness=RIGID, bottom_mass=0.0, bottom_damping=0.0)
+        else:  # "both": a higher storey between two diaphragms alike
+            bottom = dict(bottom_stiffness=diaphragm.stiffness, bottom_mass=md,
+                          bottom_damping=zeta)
+        return spec.wall.replace(**top, **bottom)
+
+    def error(self, key: str, message: str, *needles: str) -> CatalogError:
+        if self._src is None:
+            return CatalogError(f"study {self.name}: {key}: {message}")
+        return self._src.error(key, message, *needles)
+
+
+def _values(src: _Source, key: str, value: Any, kind: type) -> list:
+    """A dimension's values: a list, a scalar, or {start, stop, step} (stop included)."""
+    if isinstance(value, dict):
+        try:
+            start, stop, step = (float(value[k]) for k in ("start", "stop", "step"))
+        except KeyError as exc:
+            raise src.error(key, f"range needs start, stop and step (missing {exc.args[0]})",
+                            key.split(".")[-1]) from None
+        if step <= 0:
+            raise src.error(key, "range step must be positive", key.split(".")[-1])
+        n = int(math.floor((stop - start) / step + 1e-9)) + 1
+        decimals = max(0, -int(math.floor(math.log10(step))) + 3)
+        values = [round(start + i * step, decimals) for i in range(max(n, 0))]
+    elif isinstance(value, list):
+        values = value
+    else:
+        values = [value]
+    if not values:
+        raise src.error(key, "has no values (a dimension needs at least one)",
+                        key.split(".")[-1])
+    out = []
+    for v in values:
+        if kind is float:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise src.error(key, f"{v!r} is not a number", key.split(".")[-1])
+            out.append(float(v))
+        else:
+            if not isinstance(v, str):
+                raise src.error(key, f"{v!r} is not a string id", key.split(".")[-1])
+            out.append(v)
+    if len(set(out)) != len(out):
+        raise src.error(key, "has repeated values", key.split(".")[-1])
+    return out
+
+
+def study_path(name: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Path:
+    """A study file: a path, or the name of one in ``catalog/studies/`` (``verification``)."""
+    p = Path(name)
+    if p.suffix == ".toml" or p.exists():
+        return p
+    return catalog_dir(catalog) / "studies" / f"{name}.toml"
+
+
+def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Study:
+    """Read and validate a study file (before any computation).
+
+    Parameters
+    ----------
+    path : str or path
+        A study TOML file, or the name of a catalog study (``paper-single-storey``).
+    catalog : str or path, optional
+        Catalog folder; default: the ``catalog`` key of the study file (relative to the file),
+        else the source checkout's ``catalog/``.
+
+    Raises
+    ------
+    CatalogError
+        Naming the file, the key and the line: unknown ids, empty dimensions, bad values.
+    """
+    src = _Source(study_path(path, catalog))
+    data = src.data
+    s = data.get("study")
+    if not isinstance(s, dict):
+        raise src.error("study", "missing [study] table")
+    known = {"name", "title", "description", "walls", "diaphragms", "supports", "records", "cor",
+             "scale", "impact", "damping", "tail", "scale_factor", "pairs", "history",
+             "catalog"}
+    for k in s:
+        if k not in known:
+            raise src.error(f"study.{k}", f"unknown key (known: {', '.join(sorted(known))})", k)
+    for k in data:
+        if k not in ("study", "walls", "diaphragms"):
+            raise src.error(k, "unknown table (known: study, walls, diaphragms)", k)
+    if catalog is None and "catalog" in s:
+        catalog = (src.path.parent / s["catalog"]).resolve()
+    cat = load_catalog(catalog)
+    for ident, t in data.get("walls", {}).items():
+        cat.walls[ident] = _wall_spec(src, ident, t, key=f"walls.{ident}")
+    for ident, t in data.get("diaphragms", {}).items():
+        cat.diaphragms[ident] = _diaphragm_from_table(src, f"diaphragms.{ident}", ident, t)
+
+    for k in ("walls", "diaphragms", "records", "cor"):
+        if k not in s:
+            raise src.error(f"study.{k}", "missing", "study")
+    supports = s.get("supports", "top")
+    if supports not in SUPPORTS:
+        raise src.error("study.supports", f"{supports!r} is not one of {SUPPORTS}", "supports")
+    if s["walls"] == "parametric":
+        wall_ids = cat.parametric_walls
+    else:
+        wall_ids = _values(src, "study.walls", s["walls"], str)
+    walls = []
+    for w in wall_ids:
+        if w not in cat.walls:
+            raise src.error("study.walls", f"unknown wall id {w!r} (known: "
+                            f"{', '.join(cat.walls)})", "walls", w)
+        walls.append(cat.walls[w])
+    if supports == SPECIMEN:
+        d_ids = _values(src, "study.diaphragms", s["diaphragms"], str)
+        if d_ids != [SPECIMEN]:
+            raise src.error("study.diaphragms", 'supports = "specimen" takes diaphragms = '
+                            '["specimen"] (each wall on its own supports)', "diaphragms")
+        diaphragms = [Diaphragm(SPECIMEN, stiffness=math.nan, damping=math.nan,
+                                description="the test wall's own supports (Table II)")]
+    else:
+        diaphragms = []
+        for d in _values(src, "study.diaphragms", s["diaphragms"], str):
+            if d not in cat.diaphragms:
+                raise src.error("study.diaphragms", f"unknown diaphragm id {d!r} (known: "
+                                f"{', '.join(cat.diaphragms)})", "diaphragms", d)
+            diaphragms.append(cat.diaphragms[d])
+    records = _values(src, "study.records", s["records"], str)
+    cor = _values(src, "study.cor", s["cor"], float)
+    for c in cor:
+        if not 0.0 <= c <= 1.0:
+            raise src.error("study.cor", f"{c!r} must lie in [0, 1]", "cor")
+    extra: dict[str, list] = {}
+    impact = "scale"
+    if "impact" in s:
+        laws = _values(src, "study.impact", s["impact"], str)
+        for law in laws:
+            if law not in IMPACT_LAWS:
+                raise src.error("study.impact", f"{law!r} is not one of {IMPACT_LAWS}", "impact")
+        if isinstance(s["impact"], list):
+            extra["impact"] = laws
+        else:
+            impact = laws[0]
+    for k in ("scale", "damping"):
+        if k in s:
+            vals = _values(src, f"study.{k}", s[k], float)
+            if any(v < 0 for v in vals):
+                raise src.error(f"study.{k}", "values must not be negative", k)
+            extra[k] = vals
+    extra = {k: extra[k] for k in DIMS if k in extra}
+    tail = s.get("tail", 0.0)
+    if isinstance(tail, bool) or not isinstance(tail, (int, float)) or tail < 0:
+        raise src.error("study.tail", f"{tail!r} must be a duration >= 0 [s]", "tail")
+    scale_factor = {}
+    for r, f in s.get("scale_factor", {}).items():
+        if r not in records:
+            raise src.error(f"study.scale_factor.{r}", "names a record the study does not "
+                            "list", "scale_factor", r)
+        if isinstance(f, bool) or not isinstance(f, (int, float)) or f <= 0:
+            raise src.error(f"study.scale_factor.{r}", f"{f!r} must be a positive number",
+                            "scale_factor", r)
+        scale_factor[r] = float(f)
+    pairs = None
+    if "pairs" in s:
+        pairs = {}
+        for w, rs in s["pairs"].items():
+            if w not in wall_ids:
+                raise src.error(f"study.pairs.{w}", "names a wall the study does not list",
+                                "pairs", w)
+            rs = _values(src, f"study.pairs.{w}", rs, str)
+            for r in rs:
+                if r not in records:
+                    raise src.error(f"study.pairs.{w}", f"record {r!r} is not in study.records",
+                                    "pairs", w)
+            pairs[w] = rs
+    study = Study(name=s.get("name", src.path.stem), title=s.get("title", s.get("name", "")),
+                  path=src.path, text=src.text, catalog=cat, walls=walls,
+                  diaphragms=diaphragms, supports=supports, records=records, cor=cor,
+                  extra=extra, impact=impact, tail=float(tail), scale_factor=scale_factor,
+                  pairs=pairs, _src=src)
+    study.histories = _histories(src, study, s.get("history", []))
+    # every cell's Wall must be valid: build them now, before any computation
+    for spec in walls:
+        for d in diaphragms:
+            for z in extra.get("damping", [None]):
+                try:
+                    study.wall(spec, d, z)
+                except ValueError as exc:
+                    raise src.error("study", f"wall {spec.id!r} on diaphragm {d.id!r}: {exc}",
+                                    "walls") from None
+    return study
+
+
+def _histories(src: _Source, study: Study, entries: list) -> list[History]:
+    if isinstance(entries, dict):
+        entries = [entries]
+    out: list[History] = []
+    dims = study.dims
+    for i, e in enumerate(entries):
+        key = f"study.history[{i}]"
+        sel = {}
+        for dim in ("wall", "diaphragm", "record", "cor"):
+            v = e.get(dim, dims[dim])
+            v = v if isinstance(v, list) else [v]
+            for x in v:
+                if x not in dims[dim]:
+                    raise src.error(f"{key}.{dim}", f"{x!r} is not in the study's {dim} "
+                                    "dimension", "history", dim)
+            sel[dim] = v
+        for w in sel["wall"]:
+            for d in sel["diaphragm"]:
+                for r in sel["record"]:
+                    for c in sel["cor"]:
+                        h = History(w, d, r, float(c))
+                        if study.paired(w, r) and h not in out:
+                            out.append(h)
+    return out
+
+
+# ---- building calibration (Table IV frequencies, Table VI Delta_ins) ----------------------
+
+@dataclass
+class Calibration:
+    """Result of `calibrate`: the fitted building and every target with its residual."""
+
+    building: Building
+    frequencies: list[dict[str, Any]]  # diaphragm, bound, height, target, model, residual
+    instability: dict[str, Any]  # wall, height, target, model, residual, upper_case1
+    rms: float
+
+
+def _targets(cat: Catalog) -> tuple[list[Diaphragm], float, float]:
+    tw = [w.wall for w in cat.walls.values() if w.parametric]
+    hmin, hmax = min(w.height for w in tw), max(w.height for w in tw)
+    return [d for d in cat.diaphragms.values() if math.isfinite(d.table_stiffness)], hmin, hmax
+
+
+def _evaluate(cat: Catalog, building: Building) -> Calibration:
+    diaphragms, hmin, hmax = _targets(cat)
+    pw = [w for w in cat.walls.values() if w.parametric]
+    t = pw[0].wall.thickness
+    md = building.diaphragm_mass
+    freqs = []
+    for d in diaphragms:
+        # Table IV footnote: SDOF of mass (half the walls' effective mass + diaphragm's)
+        # the stiffest frequency belongs to the shortest wall
+        for bound, h, target in (("low", hmax, d.frequency_range[0]),
+                                 ("high", hmin, d.frequency_range[1])):
+            m = 0.5 * building.wall_mass(t, h) + md
+            f = math.sqrt(d.table_stiffness / m) / (2.0 * math.pi)
+            freqs.append(dict(diaphragm=d.id, bound=bound, height=h, target=target, model=f,
+                              residual=f / target - 1.0))
+    spec = cat.walls[cat.calibration.get("instability_wall", "s18")]
+    w = spec.wall.replace(mass=building.wall_mass(spec.wall.thickness, spec.wall.height),
+                          top_mass=md, top_stiffness=RIGID)
+    target = float(cat.calibration.get("instability_displacement", 0.062))
+    lower = w.a1 * w.segment(3).theta0  # Delta_ins lower in patterns 11/12 (Case 3)
+    upper = w.a2 * w.segment(1).theta0  # Delta_ins upper (Case 1) with the diaphragm weight
+    upper0 = w.replace(top_mass=0.0)
+    inst = dict(wall=spec.id, height=w.height, target=target, model=lower,
+                residual=lower / target - 1.0, upper_case1=upper,
+                upper_case1_no_diaphragm=upper0.a2 * upper0.segment(1).theta0,
+                lower_case2=w.a1 * w.segment(2).theta0, diaphragm_mass=md, wall_mass=w.mass)
+    res = [f["residual"] for f in freqs] + [inst["residual"]]
+    return Calibration(building, freqs, inst, float(np.sqrt(np.mean(np.square(res)))))
+
+
+def calibrate(catalog: Catalog | None = None) -> Calibration:
+    """Least-squares fit of the wall length and diaphragm weight (density held).
+
+    Targets (relative residuals): the two ends of each Table IV frequency range, the upper
+    end for the shortest parametric wall and the lower end for the tallest, and Table VI's
+    Delta_ins of the lower segment in patterns 11/12 for the calibration wall, weighted by
+    ``calibration.instability_weight`` (sqrt of the number of frequency bounds: the one
+    displacement weighs as much as all frequencies together). Only density*wall_length
+    enters the masses, so the density stays as chosen.
+    """
+    from scipy.optimize import least_squares
+
+    cat = catalog or load_catalog()
+    weight = float(cat.calibration.get("instability_weight", 1.0))
+
+    def residuals(p):
+        c = _evaluate(cat, cat.building.replace(wall_length=p[0], diaphragm_weight=p[1]))
+        return [f["residual"] for f in c.frequencies] + [weight * c.instability["residual"]]
+
+    b = cat.building
+    fit = least_squares(residuals, [b.wall_length, b.diaphragm_weight], bounds=([0.1, 0], np.inf))
+    return _evaluate(cat, b.replace(wall_length=float(fit.x[0]),
+                                    diaphragm_weight=float(fit.x[1])))
+
+
+def calibration_report(out_dir: str | os.PathLike | None = None,
+                       catalog: Catalog | None = None) -> Path:
+    """Write ``calibration.md`` and ``calibration/frequencies.png`` into `out_dir`.
+
+    The table shows the catalog's building (as stored, rounded) against Table IV and
+    Table VI, and the unrounded least-squares optimum beside it.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cat = catalog or load_catalog()
+    out = Path(out_dir) if out_dir is not None else project_root() / "reports"
+    (out / "calibration").mkdir(parents=True, exist_ok=True)
+    stored = _evaluate(cat, cat.building)
+    best = calibrate(cat)
+    b = cat.building
+    inst = stored.instability
+    lines = [
+        "# Calibration of the parametric building",
+        "",
+        "Generated by `urmx calibrate` (`urmx.catalog.calibration_report`) from "
+        "`catalog/building.toml`; do not edit by hand.",
+        "",
+        "The paper (Section 6) gives the plan, 17.4 m x 29.9 m, but not the masonry density, "
+        "the diaphragm seismic weight or the out-of-plane wall length. They set the effective "
+        "masses (Eq. 7: 8/15 of the nominal masses; the nominal wall mass is both "
+        "out-of-plane walls, the nominal diaphragm mass its weight over the plan divided by g), "
+        "and so Table IV's indicative frequencies (SDOF: stiffness over half the walls' "
+        "effective mass plus the diaphragm's) and Table VI's instability displacement of the "
+        "lower segment in patterns 11/12 (Case 3, which depends on m_dt/m). Only "
+        "density x wall length enters the masses, so the density is chosen and the wall length "
+        "and diaphragm weight are fitted by least squares on relative residuals (the one "
+        "displacement target weighted as much as the ten frequency bounds together).",
+        "",
+        "## Result",
+        "",
+        "| quantity | catalog (rounded) | least-squares optimum |",
+        "|---|---|---|",
+        f"| masonry density [kg m-3] | {b.density:g} (chosen) | {best.building.density:g} |",
+        f"| out-of-plane wall length [m] | {b.wall_length:g} | {best.building.wall_length:.4f} |",
+        f"| diaphragm seismic weight [kPa] | {b.diaphragm_weight:g} | "
+        f"{best.building.diaphragm_weight:.4f} |",
+        f"| diaphragm effective mass [kg] | {b.diaphragm_mass:.0f} | "
+        f"{best.building.diaphragm_mass:.0f} |",
+        f"| RMS relative residual | {stored.rms:.4f} | {best.rms:.4f} |",
+        "",
+        "## Table IV: indicative frequencies",
+        "",
+        "The low end of a range belongs to the tallest wall (slenderness 24), the high end to "
+        "the shortest (slenderness 8). D5 uses Table IV's 1e9 N/m here; the analyses treat "
+        "it as rigid.",
+        "",
+        "| diaphragm | stiffness [N m-1] | bound | wall height [m] | Table IV [Hz] | "
+        "model [Hz] | residual |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for f in stored.frequencies:
+        k = cat.diaphragms[f["diaphragm"]].table_stiffness
+        lines.append(f"| {f['diaphragm']} | {k:.4g} | {f['bound']} | {f['height']:.2f} | "
+                     f"{f['target']:g} | {f['model']:.3f} | {f['residual']:+.3f} |")
+    lines += [
+        "",
+        "## Table VI: instability displacements of the 4140 mm wall",
+        "",
+        "| segment, case | Table VI [mm] | model [mm] | residual |",
+        "|---|---|---|---|",
+        f"| lower, patterns 11/12 (Case 3) | {1e3 * inst['target']:.0f} | "
+        f"{1e3 * inst['model']:.1f} | {inst['residual']:+.3f} |",
+        f"| lower, patterns 21/22 (Case 2) | 230 | {1e3 * inst['lower_case2']:.1f} | "
+        f"{inst['lower_case2'] / 0.230 - 1:+.3f} |",
+        f"| upper (Case 1), diaphragm weight on the wall | 230 | "
+        f"{1e3 * inst['upper_case1']:.1f} | {inst['upper_case1'] / 0.230 - 1:+.3f} |",
+        f"| upper (Case 1), m_dt = 0 | 230 | {1e3 * inst['upper_case1_no_diaphragm']:.1f} | "
+        f"{inst['upper_case1_no_diaphragm'] / 0.230 - 1:+.3f} |",
+        "",
+        "Table VI's 230 mm for the upper segment is b, Case 1's Delta_ins = a2*theta0 = "
+        "b/2 (m2 + m_dt)/(0.5 m2 + m_dt), which equals b only when no diaphragm weight bears "
+        "on the wall (m_dt = 0). With the calibrated diaphragm the upper segment's Delta_ins "
+        f"is {1e3 * inst['upper_case1']:.0f} mm; urmx uses it (MODEL.md section 3).",
+        f"Masses of the 4140 mm wall: effective wall mass m = {inst['wall_mass']:.0f} kg, "
+        f"effective diaphragm mass m_dt = {inst['diaphragm_mass']:.0f} kg.",
+        "",
+        "Diaphragm damping: 12 % of critical on every flexible diaphragm, the value the paper "
+        "used for its flexible supports (Section 4.1, after [9], which reports 8 % or 12 %).",
+        "",
+        "![Table IV frequency ranges against the calibrated building]"
+        "(calibration/frequencies.png)",
+        "",
+    ]
+    (out / "calibration.md").write_text("\n".join(lines), encoding="utf-8")
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.0))
+    _, hmin, hmax = _targets(cat)
+    hs = np.linspace(hmin, hmax, 50)
+    t = next(w.wall.thickness for w in cat.walls.values() if w.parametric)
+    for i, d in enumerate(_targets(cat)[0]):
+        color = f"C{i}"
+        m = 0.5 * np.array([b.wall_mass(t, h) for h in hs]) + b.diaphragm_mass
+        ax.plot(hs / t, np.sqrt(d.table_stiffness / m) / (2 * np.pi), color=color,
+                label=f"{d.id} model")
+        lo, hi = d.frequency_range
+        ax.fill_between([hmin / t, hmax / t], lo, hi, color=color, alpha=0.15)
+        ax.plot([hmax / t, hmin / t], [lo, hi], "o", color=color, mfc="none")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall slenderness h/b [1]")
+    ax.set_ylabel("diaphragm frequency [Hz]")
+    ax.set_title("Table IV ranges (bands, circles) and the calibrated building (lines)",
+                 fontsize=9)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(out / "calibration" / "frequencies.png", dpi=120)
+    plt.close(fig)
+    return out / "calibration.md"

@@ -1,0 +1,536 @@
+"""Study grids: a study file -> batches on dask -> one labelled Dataset -> a netCDF archive.
+
+A study (`urmx.catalog.load_study`) is a grid over ``wall``, ``diaphragm``, ``record``,
+``cor`` and any of ``scale``, ``impact``, ``damping``. It runs in **batches**: one record,
+one diaphragm and a group of walls, over every value of the other dimensions; a batch returns
+plain numpy arrays (the kernel knows nothing of xarray), and the Dataset is built once from
+them.
+
+Resumable archives: with ``out=FILE.nc`` every finished batch is saved at once as a small
+``.npz`` in the sidecar folder ``FILE.nc.parts/``, named by a hash of everything that decides
+its result (walls, record samples, scale factor, CORs, kernel, urmx version). A run that is
+stopped (Ctrl-C, a killed worker, a full disk) keeps those files; run it again and only the
+missing batches are computed. The archive is written to a temporary name and renamed, and the
+sidecar folder is removed after that. The archive's ``history`` carries the time the run was
+first started, so a resumed run writes the same archive as an uninterrupted one.
+
+Schedulers: ``None`` (default) starts a local ``dask.distributed`` cluster of worker
+processes, one per core (the numba kernel holds the GIL, so processes beat threads);
+``"threads"`` the same with threads; ``"serial"`` runs in this process; any other string is a
+scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it is.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import math
+import os
+import shutil
+import sys
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from . import variables
+from .catalog import SPECIMEN, Study, load_study
+
+STATUS = ("ok", "collapsed", "event-limit", "not-run")  # flag values 0, 1, 2, 3
+NOT_RUN = STATUS.index("not-run")
+INT_FILL = -1  # integer outputs of cells a study's pairs leave out
+
+# attributes of the coordinates (the variable registry covers the kernel's outputs)
+COORDS: dict[str, dict[str, str]] = {
+    "wall": {"long_name": "wall id"},
+    "slenderness": {"units": "1", "long_name": "wall slenderness h/b"},
+    "height": {"units": "m", "long_name": "wall height"},
+    "thickness": {"units": "m", "long_name": "wall thickness"},
+    "mass": {"units": "kg", "long_name": "wall mass (effective for building walls)"},
+    "crack_ratio": {"units": "1", "long_name": "crack height over wall height"},
+    "pmr": {"units": "%", "long_name": "percentage of maximum rigid resistance"},
+    "diaphragm": {"long_name": "diaphragm id"},
+    "stiffness": {"units": "N m-1", "long_name": "diaphragm stiffness",
+                  "comment": "inf: rigid support; NaN: each test wall's own supports"},
+    "frequency": {"units": "Hz", "long_name": "indicative diaphragm frequency",
+                  "comment": "Table IV footnote SDOF (stiffness over diaphragm mass plus half "
+                             "the wall mass) for the study's median wall; "
+                             "see cell_frequency for every wall"},
+    "cell_frequency": {"units": "Hz", "long_name": "indicative frequency of the top support",
+                       "comment": "Table IV footnote SDOF of each wall on each diaphragm"},
+    "diaphragm_mass": {"units": "kg", "long_name": "diaphragm effective mass"},
+    "diaphragm_damping": {"units": "1", "long_name": "diaphragm damping ratio"},
+    "record": {"long_name": "ground-motion record id"},
+    "pga": {"units": "m s-2", "long_name": "peak ground acceleration (unscaled record)"},
+    "scale_factor": {"units": "1", "long_name": "record scale factor"},
+    "scaled_pga": {"units": "m s-2", "long_name": "peak ground acceleration as analysed",
+                   "comment": "pga * scale_factor (times the scale dimension, if any)"},
+    "record_dt": {"units": "s", "long_name": "record time step"},
+    "cor": {"units": "1", "long_name": "coefficient of restitution"},
+    "scale": {"units": "1", "long_name": "extra scale on the record's scale factor"},
+    "impact": {"long_name": "impact law"},
+    "damping": {"units": "1", "long_name": "damping ratio of the flexible supports"},
+    "history": {"long_name": "cell with time histories"},
+    "history_wall": {"long_name": "wall of the history cell"},
+    "history_diaphragm": {"long_name": "diaphragm of the history cell"},
+    "history_record": {"long_name": "record of the history cell"},
+    "history_cor": {"units": "1", "long_name": "coefficient of restitution of the history cell"},
+}
+
+
+# ---- records --------------------------------------------------------------------------------
+
+@dataclass
+class RecordData:
+    """One record as the study uses it: samples in m s-2 (unscaled), dt and scale factor."""
+
+    id: str
+    acceleration: np.ndarray
+    dt: float
+    scale_factor: float
+    digest: str
+
+    @property
+    def pga(self) -> float:
+        return float(np.max(np.abs(self.acceleration)))
+
+
+def resolve_records(study: Study, records_dir: str | os.PathLike | None = None,
+                    ) -> dict[str, RecordData]:
+    """Load the study's records through `urmx.records` (manifest scale factors unless the
+    study overrides them); an unknown id fails with the study file and line."""
+    from . import records as rec
+
+    manifest = rec.manifest(records_dir)
+    out = {}
+    for rid in study.records:
+        if rid not in manifest:
+            raise study.error("study.records", f"record {rid!r} is not in the records manifest "
+                              f"(known: {', '.join(sorted(manifest))})", "records", rid)
+    for rid in study.records:
+        trace = rec.load(rid, records_dir)
+        acc = np.ascontiguousarray(trace.data, dtype=np.float64)
+        sf = study.scale_factor.get(rid, manifest[rid].get("scale_factor", 1.0))
+        digest = hashlib.sha256(acc.tobytes()).hexdigest()[:16]
+        out[rid] = RecordData(rid, acc, float(trace.stats.delta), float(sf), digest)
+    dts = {out[h.record].dt for h in study.histories}
+    if len(dts) > 1:
+        raise study.error("study.history", "history cells must share one record time step "
+                          f"(found {sorted(dts)} s)", "history")
+    return out
+
+
+# ---- batches --------------------------------------------------------------------------------
+
+@dataclass
+class Batch:
+    """A group of walls x one diaphragm x one record, over all cor and added dimensions."""
+
+    walls: list[int]  # indices into the wall dimension
+    diaphragm: int
+    record: int
+    key: str = ""
+
+
+def _batches(study: Study, batch_size: int) -> list[Batch]:
+    inner = math.prod(len(v) for k, v in study.dims.items()
+                      if k not in ("wall", "diaphragm", "record"))
+    per = max(1, batch_size // inner)
+    out = []
+    for ir, rid in enumerate(study.records):
+        for idp in range(len(study.diaphragms)):
+            walls = [iw for iw, w in enumerate(study.walls) if study.paired(w.id, rid)]
+            for i in range(0, len(walls), per):
+                out.append(Batch(walls[i:i + per], idp, ir))
+    return out
+
+
+def _task(study: Study, batch: Batch, records: dict[str, RecordData],
+          kernel: Callable | None) -> dict[str, Any]:
+    """Everything a worker needs for one batch (picklable, no xarray), and its hash key."""
+    from . import __version__
+
+    d = study.diaphragms[batch.diaphragm]
+    rec = records[study.records[batch.record]]
+    dampings = study.extra.get("damping", [None])
+    walls = [[study.wall(study.walls[iw], d, z) for z in dampings] for iw in batch.walls]
+    hist = []
+    for h in study.histories:
+        if h.diaphragm == d.id and h.record == rec.id:
+            ids = [study.walls[iw].id for iw in batch.walls]
+            if h.wall in ids:
+                hist.append((ids.index(h.wall), study.cor.index(h.cor), h.label))
+    task = dict(
+        walls=walls, dt=rec.dt, scale_factor=rec.scale_factor, cor=list(study.cor),
+        scale=study.extra.get("scale", [1.0]), impact=study.extra.get("impact", [study.impact]),
+        tail=study.tail, history=hist, kernel=kernel,
+        has_damping="damping" in study.extra)
+    ident = dict(task, walls=[[w.to_dict() for w in ws] for ws in walls], record=rec.id,
+                 record_digest=rec.digest,
+                 kernel=None if kernel is None else f"{kernel.__module__}.{kernel.__qualname__}",
+                 urmx=__version__)
+    batch.key = hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode()
+                               ).hexdigest()[:20]
+    return task
+
+
+def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.ndarray]:
+    """Run one batch through the kernel: numpy arrays of shape (walls, cor, scale, impact,
+    damping) per output, plus the kept time histories. Numpy only."""
+    kernel = task["kernel"]
+    if kernel is None:
+        from .kernel import run as kernel
+    nw, nz = len(task["walls"]), len(task["walls"][0])
+    shape = (nw, len(task["cor"]), len(task["scale"]), len(task["impact"]), nz)
+    out: dict[str, np.ndarray] = {}
+    for name in variables.SCALARS:
+        if name in variables.INTEGER_SCALARS:
+            out[name] = np.full(shape, INT_FILL, dtype=np.int32)
+        else:
+            out[name] = np.full(shape, np.nan)
+    out["status"] = np.full(shape, NOT_RUN, dtype=np.int8)
+    hist = {(iw, ic): label for iw, ic, label in task["history"]}
+    labels = []
+    for iw, ic, isc, ii, iz in np.ndindex(*shape):
+        keep = (iw, ic) in hist and isc == 0 and ii == 0 and iz == 0
+        kw = dict(scale=task["scale_factor"] * task["scale"][isc], cor=task["cor"][ic],
+                  impact=task["impact"][ii], tail=task["tail"])
+        if keep:
+            kw["history"] = True
+        result = kernel(task["walls"][iw][iz], acceleration, task["dt"], **kw)
+        for name in variables.SCALARS:
+            out[name][iw, ic, isc, ii, iz] = result[name]
+        out["status"][iw, ic, isc, ii, iz] = STATUS.index(result["status"])
+        if keep:
+            h = result["history"]
+            j = len(labels)
+            labels.append(hist[(iw, ic)])
+            for name in (*variables.HISTORIES, "time"):
+                if name in h:
+                    out[f"history{j}.{name}"] = np.asarray(h[name], dtype=np.float64)
+    out["history_labels"] = np.array(labels, dtype=str)
+    return out
+
+
+def _save_part(parts: Path, key: str, result: dict[str, np.ndarray]) -> None:
+    tmp = parts / f".{key}.{os.getpid()}.tmp.npz"
+    np.savez(tmp, **result)
+    os.replace(tmp, parts / f"{key}.npz")
+
+
+def _load_part(path: Path) -> dict[str, np.ndarray] | None:
+    try:
+        with np.load(path) as z:
+            return {k: z[k] for k in z.files}
+    except Exception:  # a truncated file (disk full, killed mid-write): compute it again
+        return None
+
+
+# ---- running ----------------------------------------------------------------------------------
+
+class _Progress:
+    """A one-line progress bar on stderr."""
+
+    def __init__(self, total: int, cells: int, enabled: bool):
+        self.total, self.cells, self.enabled = total, cells, enabled
+        self.done = 0
+        self.start = _time.perf_counter()
+
+    def update(self, n: int = 1) -> None:
+        self.done += n
+        if not self.enabled or not self.total:
+            return
+        frac = self.done / self.total
+        bar = "#" * int(30 * frac)
+        sys.stderr.write(f"\r[{bar:<30}] {self.done}/{self.total} batches "
+                         f"({int(frac * self.cells)}/{self.cells} analyses) "
+                         f"{_time.perf_counter() - self.start:.1f} s")
+        if self.done == self.total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+def _client(scheduler: Any):
+    """(client, owned) for a scheduler argument."""
+    from distributed import Client, LocalCluster
+
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if scheduler in (None, "processes", "threads"):
+        processes = scheduler != "threads"
+        n = os.cpu_count() or 1
+        cluster = LocalCluster(n_workers=n if processes else 1,
+                               threads_per_worker=1 if processes else n,
+                               processes=processes, dashboard_address=None)
+        return Client(cluster), True
+    return Client(scheduler), True
+
+
+def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], rec_ids: list[str],
+             scheduler: Any, on_result: Callable[[Batch, dict], None]) -> None:
+    if scheduler == "serial" or len(tasks) <= 1 and not hasattr(scheduler, "submit"):
+        for batch, task in tasks:
+            on_result(batch, run_batch(task, records[rec_ids[batch.record]].acceleration))
+        return
+    from distributed import as_completed
+
+    client, owned = _client(scheduler)
+    futures = {}
+    try:
+        acc = {rid: client.scatter(records[rid].acceleration, broadcast=True)
+               for rid in {rec_ids[b.record] for b, _ in tasks}}
+        for batch, task in tasks:
+            f = client.submit(run_batch, task, acc[rec_ids[batch.record]],
+                              key=f"urmx-batch-{batch.key}", pure=False)
+            futures[f.key] = (f, batch)
+        for f in as_completed([f for f, _ in futures.values()]):
+            on_result(futures[f.key][1], f.result())
+    finally:
+        if owned:
+            for f, _ in futures.values():
+                f.cancel()
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+
+def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None = None,
+              scheduler: Any = None, progress: bool = True, batch_size: int = 16,
+              records_dir: str | os.PathLike | None = None, kernel: Callable | None = None,
+              command: str | None = None) -> xr.Dataset:
+    """Run a study grid and return one labelled Dataset (and write it to `out`).
+
+    Parameters
+    ----------
+    study : Study or str or path
+        A loaded study, a study file, or the name of a catalog study.
+    out : str or path, optional
+        netCDF archive to write. Finished batches are kept in ``<out>.parts/`` until the
+        archive is written, so an interrupted run resumes where it stopped.
+    scheduler : None, "serial", "threads", address or distributed.Client
+        Where batches run (module docstring). Default: local worker processes, one per core.
+    progress : bool
+        Show a progress bar on stderr.
+    batch_size : int
+        Target number of analyses per batch (walls are grouped to reach it). [1]
+    records_dir : str or path, optional
+        Records folder (default `urmx.config.records_dir`).
+    kernel : callable, optional
+        Integrator with the signature of `urmx.kernel.run` (default), e.g. a reference solver.
+    command : str, optional
+        Command line for the ``history`` attribute.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    if not isinstance(study, Study):
+        study = load_study(study)
+    records = resolve_records(study, records_dir)
+    batches = _batches(study, batch_size)
+    tasks = [(b, _task(study, b, records, kernel)) for b in batches]
+    parts = None
+    results: dict[str, dict[str, np.ndarray]] = {}
+    started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
+    if out is not None:
+        out = Path(out)
+        parts = out.with_name(out.name + ".parts")
+        parts.mkdir(parents=True, exist_ok=True)
+        stamp_file = parts / "started"
+        if stamp_file.is_file():
+            started = stamp_file.read_text().strip()
+        else:
+            stamp_file.write_text(started + "\n")
+        for b, _ in tasks:
+            p = parts / f"{b.key}.npz"
+            if p.is_file():
+                r = _load_part(p)
+                if r is not None:
+                    results[b.key] = r
+    todo = [(b, t) for b, t in tasks if b.key not in results]
+    bar = _Progress(len(tasks), study.size, progress)
+    bar.done = len(tasks) - len(todo)
+
+    def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
+        if parts is not None:
+            _save_part(parts, batch.key, result)
+        results[batch.key] = result
+        bar.update()
+
+    _compute(todo, records, study.records, scheduler, on_result)
+    ds = _assemble(study, records, tasks, results, started, command)
+    if out is not None:
+        write_archive(ds, out)
+        shutil.rmtree(parts, ignore_errors=True)
+    return ds
+
+
+# ---- the Dataset ----------------------------------------------------------------------------
+
+def _coord(name: str, dims: Any, values: Any) -> xr.Variable:
+    return xr.Variable(dims, values, attrs=dict(COORDS.get(name, {})))
+
+
+def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Batch, dict]],
+              results: dict[str, dict[str, np.ndarray]], started: str,
+              command: str | None) -> xr.Dataset:
+    from . import __version__
+
+    dims = study.dims
+    names = list(dims)
+    shape = tuple(len(v) for v in dims.values())
+    data: dict[str, np.ndarray] = {}
+    for name in variables.SCALARS:
+        if name in variables.INTEGER_SCALARS:
+            data[name] = np.full(shape, INT_FILL, dtype=np.int32)
+        else:
+            data[name] = np.full(shape, np.nan)
+    data["status"] = np.full(shape, NOT_RUN, dtype=np.int8)
+    # batch arrays are (walls, cor, scale, impact, damping); drop the axes the study lacks
+    drop = tuple(i + 2 for i, k in enumerate(("scale", "impact", "damping"))
+                 if k not in study.extra)
+    hist: dict[str, dict[str, np.ndarray]] = {}
+    for batch, _ in tasks:
+        r = results[batch.key]
+        for name in data:
+            arr = r[name].reshape([n for i, n in enumerate(r[name].shape) if i not in drop])
+            for j, iw in enumerate(batch.walls):
+                data[name][iw, batch.diaphragm, batch.record] = arr[j]
+        for j, label in enumerate(r["history_labels"]):
+            prefix = f"history{j}."
+            hist[str(label)] = {k[len(prefix):]: v for k, v in r.items() if k.startswith(prefix)}
+
+    data_vars = {}
+    for name, arr in data.items():
+        attrs = dict(variables.attrs(name))
+        if name == "status":
+            attrs.pop("units", None)
+            attrs["flag_values"] = np.arange(len(STATUS), dtype=np.int8)
+            attrs["flag_meanings"] = " ".join(s.replace("-", "_") for s in STATUS)
+        elif name in variables.INTEGER_SCALARS:
+            attrs["comment"] = f"{INT_FILL} where the cell was not run"
+        data_vars[name] = xr.Variable(names, arr, attrs=attrs)
+
+    walls = [w.wall for w in study.walls]
+    specimen = study.supports == SPECIMEN
+    cell_walls = [[study.wall(s, d) for d in study.diaphragms] for s in study.walls]
+    cell_freq = np.array([[w.diaphragm_frequency("top") for w in row] for row in cell_walls])
+    median = len(walls) // 2
+    md = study.catalog.building.diaphragm_mass
+    recs = [records[r] for r in study.records]
+    coords = {
+        "wall": _coord("wall", "wall", np.array(dims["wall"], dtype=object)),
+        "slenderness": _coord("slenderness", "wall", np.array([w.slenderness for w in walls])),
+        "height": _coord("height", "wall", np.array([w.height for w in walls])),
+        "thickness": _coord("thickness", "wall", np.array([w.thickness for w in walls])),
+        "mass": _coord("mass", "wall", np.array([w.mass for w in walls])),
+        "crack_ratio": _coord("crack_ratio", "wall", np.array([w.crack_ratio for w in walls])),
+        "pmr": _coord("pmr", "wall", np.array([w.pmr for w in walls])),
+        "diaphragm": _coord("diaphragm", "diaphragm", np.array(dims["diaphragm"], dtype=object)),
+        "stiffness": _coord("stiffness", "diaphragm", np.array(
+            [math.nan if specimen else d.stiffness_value for d in study.diaphragms])),
+        "frequency": _coord("frequency", "diaphragm", np.array(
+            [math.nan if specimen else cell_freq[median, i]
+             for i in range(len(study.diaphragms))])),
+        "cell_frequency": _coord("cell_frequency", ("wall", "diaphragm"), cell_freq),
+        "diaphragm_mass": _coord("diaphragm_mass", "diaphragm", np.array(
+            [math.nan if specimen else md for _ in study.diaphragms])),
+        "diaphragm_damping": _coord("diaphragm_damping", "diaphragm", np.array(
+            [d.damping for d in study.diaphragms])),
+        "record": _coord("record", "record", np.array(dims["record"], dtype=object)),
+        "pga": _coord("pga", "record", np.array([r.pga for r in recs])),
+        "scale_factor": _coord("scale_factor", "record",
+                               np.array([r.scale_factor for r in recs])),
+        "scaled_pga": _coord("scaled_pga", "record",
+                             np.array([r.pga * r.scale_factor for r in recs])),
+        "record_dt": _coord("record_dt", "record", np.array([r.dt for r in recs])),
+        "cor": _coord("cor", "cor", np.array(dims["cor"], dtype=np.float64)),
+    }
+    for k in ("scale", "damping"):
+        if k in dims:
+            coords[k] = _coord(k, k, np.array(dims[k], dtype=np.float64))
+    if "impact" in dims:
+        coords["impact"] = _coord("impact", "impact", np.array(dims["impact"], dtype=object))
+
+    if study.histories:
+        labels = [h.label for h in study.histories]
+        n = max(len(hist[lab]["time"]) for lab in labels)
+        longest = max(labels, key=lambda lab: len(hist[lab]["time"]))
+        coords.update({
+            "history": _coord("history", "history", np.array(labels, dtype=object)),
+            "history_wall": _coord("history_wall", "history",
+                                   np.array([h.wall for h in study.histories], dtype=object)),
+            "history_diaphragm": _coord("history_diaphragm", "history", np.array(
+                [h.diaphragm for h in study.histories], dtype=object)),
+            "history_record": _coord("history_record", "history",
+                                     np.array([h.record for h in study.histories], dtype=object)),
+            "history_cor": _coord("history_cor", "history",
+                                  np.array([h.cor for h in study.histories])),
+            "time": xr.Variable("time", hist[longest]["time"], attrs=variables.attrs("time")),
+        })
+        present = [v for v in variables.HISTORIES if v in hist[labels[0]]]
+        for v in present:
+            arr = np.full((len(labels), n), np.nan)
+            for i, lab in enumerate(labels):
+                arr[i, : len(hist[lab][v])] = hist[lab][v]
+            data_vars[v] = xr.Variable(("history", "time"), arr, attrs=variables.attrs(v))
+
+    cmd = command or f"urmx.run_study({study.name!r})"
+    ds = xr.Dataset(data_vars, coords=coords, attrs={
+        "title": study.title or study.name,
+        "Conventions": "CF-1.8",
+        "history": f"{started} urmx {__version__}: {cmd}",
+        "urmx_version": __version__,
+        "study_name": study.name,
+        "study": study.text,
+        "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
+    })
+    return ds
+
+
+def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
+    """netCDF4 encoding per variable: compressed outputs, no fill value on coordinates."""
+    enc: dict[str, dict[str, Any]] = {}
+    for name, var in ds.variables.items():
+        if var.dtype == object:
+            enc[name] = {}
+        elif name in ds.coords:
+            enc[name] = {"_FillValue": None}
+        elif np.issubdtype(var.dtype, np.integer):
+            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
+        else:
+            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}
+    return enc
+
+
+def write_archive(ds: xr.Dataset, out: str | os.PathLike) -> Path:
+    """Write `ds` as netCDF4 to a temporary name beside `out` and rename it (atomic)."""
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+    try:
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
+        os.replace(tmp, out)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return out
+
+
+def open_study(path: str | os.PathLike, chunks: Any = None) -> xr.Dataset:
+    """Reopen a study archive lazily (dask arrays; ``chunks`` as for `xarray.open_dataset`,
+    default one chunk per variable)."""
+    return xr.open_dataset(path, engine="netcdf4", chunks={} if chunks is None else chunks)
+
+
+def status_names(status: xr.DataArray) -> xr.DataArray:
+    """The status codes of a study as strings (``ok``, ``collapsed``, ...)."""
+    return xr.apply_ufunc(lambda a: np.asarray(STATUS, dtype=object)[a], status,
+                          dask="allowed")
+

@@ -1,0 +1,54 @@
+"""Errors raised by the record readers and the manifest.
+
+Every error is a :class:`ValueError` subclass (or :class:`FileNotFoundError` for a missing
+file), names the file and says what is wrong, so the CLI can print it as one line.
+"""
+
+from __future__ import annotations
+
+import os
+
+
+class RecordError(ValueError):
+    """A record file cannot be turned into a trustworthy acceleration history."""
+
+    def __init__(self, path: str | os.PathLike | None, problem: str):
+        self.path = None if path is None else str(path)
+        self.problem = problem
+        super().__init__(f"{self.path}: {problem}" if self.path else problem)
+
+
+class UnknownFormatError(RecordError):
+    """The file's content matches no supported record format."""
+
+
+class TruncatedRecordError(RecordError):
+    """The file ends before all the samples its header announces."""
+
+
+class PointCountError(RecordError):
+    """The number of samples disagrees with the point count in the header."""
+
+
+class NonFiniteError(RecordError):
+    """The samples contain NaN or infinite values."""
+
+
+class RecordUnitError(RecordError):
+    """A unit is unknown, missing, contradicts the header, or gives implausible values."""
+
+
+class MissingTimeStepError(RecordError):
+    """The file does not carry its time step and none was given."""
+
+
+class UnsupportedRecordError(RecordError):
+    """A known file type that holds no usable acceleration (raw counts, spectra)."""
+
+
+class ChecksumError(RecordError):
+    """A record file's SHA-256 differs from the manifest."""
+
+
+class ManifestError(RecordError):
+    """The manifest is malformed or does not know a record id."""

@@ -1,0 +1,116 @@
+"""Processing with ObsPy: baseline, taper, band-pass, resampling, scaling.
+
+Every function returns a new :class:`obspy.Trace` (the input is not modified) and the
+step lands in ``stats.processing``: ObsPy's own methods record themselves, and the
+urmx steps that ObsPy lacks (scaling to a target PGA) append an entry in the same style.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .readers import G
+
+
+def baseline(trace, order: int = 0):
+    """Remove the mean (``order=0``) or a polynomial baseline of ``order`` (ObsPy ``detrend``).
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        Acceleration [m s-2].
+    order : int
+        0 removes the mean, 1 a straight line, higher a polynomial. [1]
+    """
+    tr = trace.copy()
+    if order == 0:
+        tr.detrend("demean")
+    elif order == 1:
+        tr.detrend("linear")
+    else:
+        tr.detrend("polynomial", order=order)
+    return tr
+
+
+def taper(trace, fraction: float = 0.05):
+    """Cosine (Hann) taper of ``fraction`` of the record at each end. [1]"""
+    tr = trace.copy()
+    tr.taper(max_percentage=fraction, type="hann")
+    return tr
+
+
+def bandpass(trace, freqmin: float = 0.1, freqmax: float = 25.0, corners: int = 4,
+             zerophase: bool = True):
+    """Butterworth band-pass (ObsPy ``filter("bandpass")``).
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        Acceleration [m s-2].
+    freqmin, freqmax : float
+        Corner frequencies [Hz]; ``freqmax`` is capped just below the Nyquist frequency.
+    corners : int
+        Filter order. [1]
+    zerophase : bool
+        Run forwards and backwards (no phase shift).
+    """
+    tr = trace.copy()
+    nyquist = 0.5 / tr.stats.delta
+    tr.filter("bandpass", freqmin=freqmin, freqmax=min(freqmax, 0.95 * nyquist),
+              corners=corners, zerophase=zerophase)
+    return tr
+
+
+def resample(trace, dt: float):
+    """Resample to time step ``dt`` [s] (anti-aliased, ObsPy ``resample``/``interpolate``)."""
+    tr = trace.copy()
+    if np.isclose(tr.stats.delta, dt, rtol=1e-9):
+        return tr
+    if dt > tr.stats.delta:
+        tr.resample(1.0 / dt, no_filter=False)
+    else:
+        tr.interpolate(sampling_rate=1.0 / dt, method="lanczos", a=20)
+    return tr
+
+
+def scale(trace, factor: float | None = None, target_pga: float | None = None):
+    """Scale by ``factor`` [1] or so that the PGA equals ``target_pga`` [m s-2].
+
+    Returns
+    -------
+    obspy.Trace
+        The scaled copy; ``stats.scale_factor`` holds the factor applied.
+    """
+    if (factor is None) == (target_pga is None):
+        raise ValueError("scale: give exactly one of factor= or target_pga=")
+    tr = trace.copy()
+    pga = float(np.max(np.abs(tr.data)))
+    if target_pga is not None:
+        if pga == 0:
+            raise ValueError(f"scale: trace {tr.id} is all zeros, cannot reach a target PGA")
+        factor = target_pga / pga
+    tr.data = tr.data * factor
+    tr.stats.scale_factor = float(factor) * float(trace.stats.get("scale_factor", 1.0))
+    tr.stats.processing.append(
+        f"urmx.records.scale: x {factor:.6g}" +
+        (f" (target PGA {target_pga:.6g} m/s2 = {target_pga / G:.4f} g)" if target_pga else ""))
+    return tr
+
+
+def process(trace, demean: bool = True, taper_fraction: float | None = 0.05,
+            freqmin: float | None = None, freqmax: float | None = None,
+            dt: float | None = None, factor: float | None = None,
+            target_pga: float | None = None):
+    """The usual chain: baseline, taper, band-pass, resample, scale (each step optional)."""
+    tr = trace
+    if demean:
+        tr = baseline(tr, 0)
+    if taper_fraction:
+        tr = taper(tr, taper_fraction)
+    if freqmin is not None or freqmax is not None:
+        tr = bandpass(tr, freqmin or 0.05, freqmax or 0.95 * 0.5 / tr.stats.delta)
+    if dt is not None:
+        tr = resample(tr, dt)
+    if factor is not None or target_pga is not None:
+        tr = scale(tr, factor, target_pga)
+    return tr

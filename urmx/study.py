@@ -80,6 +80,9 @@ COORDS: dict[str, dict[str, str]] = {
     "history_diaphragm": {"long_name": "diaphragm of the history cell"},
     "history_record": {"long_name": "record of the history cell"},
     "history_cor": {"units": "1", "long_name": "coefficient of restitution of the history cell"},
+    "history_dt": {"units": "s", "long_name": "record time step of the history cell",
+                   "comment": "histories of records with a coarser step than the time axis "
+                              "are linearly interpolated onto it (pattern: held)"},
 }
 
 
@@ -118,10 +121,6 @@ def resolve_records(study: Study, records_dir: str | os.PathLike | None = None,
         sf = study.scale_factor.get(rid, manifest[rid].get("scale_factor", 1.0))
         digest = hashlib.sha256(acc.tobytes()).hexdigest()[:16]
         out[rid] = RecordData(rid, acc, float(trace.stats.delta), float(sf), digest)
-    dts = {out[h.record].dt for h in study.histories}
-    if len(dts) > 1:
-        raise study.error("study.history", "history cells must share one record time step "
-                          f"(found {sorted(dts)} s)", "history")
     return out
 
 
@@ -460,8 +459,7 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
 
     if study.histories:
         labels = [h.label for h in study.histories]
-        n = max(len(hist[lab]["time"]) for lab in labels)
-        longest = max(labels, key=lambda lab: len(hist[lab]["time"]))
+        time, hist_dt = _history_time(hist, labels)
         coords.update({
             "history": _coord("history", "history", np.array(labels, dtype=object)),
             "history_wall": _coord("history_wall", "history",
@@ -472,13 +470,14 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
                                      np.array([h.record for h in study.histories], dtype=object)),
             "history_cor": _coord("history_cor", "history",
                                   np.array([h.cor for h in study.histories])),
-            "time": xr.Variable("time", hist[longest]["time"], attrs=variables.attrs("time")),
+            "history_dt": _coord("history_dt", "history", np.array(hist_dt)),
+            "time": xr.Variable("time", time, attrs=variables.attrs("time")),
         })
         present = [v for v in variables.HISTORIES if v in hist[labels[0]]]
         for v in present:
-            arr = np.full((len(labels), n), np.nan)
+            arr = np.full((len(labels), len(time)), np.nan)
             for i, lab in enumerate(labels):
-                arr[i, : len(hist[lab][v])] = hist[lab][v]
+                arr[i] = _on_grid(time, hist[lab]["time"], hist[lab][v], v == "pattern")
             data_vars[v] = xr.Variable(("history", "time"), arr, attrs=variables.attrs(v))
 
     cmd = command or f"urmx.run_study({study.name!r})"
@@ -492,6 +491,37 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
         "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
     })
     return ds
+
+
+def _history_time(hist: dict, labels: list[str]) -> tuple[np.ndarray, list[float]]:
+    """The shared time axis of the kept histories: the finest record step, up to the
+    longest history."""
+    dts = [float(np.median(np.diff(hist[lab]["time"]))) if len(hist[lab]["time"]) > 1
+           else 0.0 for lab in labels]
+    dt = min(d for d in dts if d > 0) if any(d > 0 for d in dts) else 1.0
+    end = max(float(hist[lab]["time"][-1]) for lab in labels)
+    n = int(round(end / dt)) + 1
+    longest = max(labels, key=lambda lab: len(hist[lab]["time"]))
+    if len(hist[longest]["time"]) == n:
+        return np.asarray(hist[longest]["time"], dtype=np.float64), dts
+    return np.arange(n) * dt, dts
+
+
+def _on_grid(time: np.ndarray, own: np.ndarray, values: np.ndarray, step: bool) -> np.ndarray:
+    """A history on the shared time axis: as it is when its record has that step (NaN after
+    its end); else linearly interpolated (the pattern, a state, held from the last sample)."""
+    out = np.full(len(time), np.nan)
+    n = len(own)
+    if n <= len(time) and np.allclose(own, time[:n], rtol=0, atol=1e-9 * max(1.0, time[-1])):
+        out[:n] = values
+        return out
+    inside = time <= own[-1] + 1e-12
+    if step:
+        idx = np.clip(np.searchsorted(own, time[inside] + 1e-12, side="right") - 1, 0, n - 1)
+        out[inside] = values[idx]
+    else:
+        out[inside] = np.interp(time[inside], own, values)
+    return out
 
 
 def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:

@@ -1,0 +1,99 @@
+"""``urmx run``, ``urmx paper`` and ``urmx calibrate``: thin commands over urmx.study."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+PAPER_STUDIES = ("paper-single-storey", "paper-multi-storey", "verification")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("run", help="run a study file into a netCDF archive (resumable)")
+    p.add_argument("study", help="study TOML file, or the name of a catalog study")
+    p.add_argument("--out", required=True, help="netCDF archive to write (FILE.nc)")
+    _common(p)
+    p.set_defaults(handler=_run)
+
+    p = sub.add_parser("paper", help="run the paper's studies and write the reports")
+    p.add_argument("--out", default="results", help="output folder (default: results)")
+    _common(p)
+    p.set_defaults(handler=_paper)
+
+    p = sub.add_parser("calibrate", help="fit the parametric building, write "
+                       "reports/calibration.md")
+    p.add_argument("--out", default=None, help="report folder (default: the checkout's reports/)")
+    p.set_defaults(handler=_calibrate)
+
+
+def _common(p) -> None:
+    p.add_argument("--scheduler", default=None,
+                   help='dask scheduler address (tcp://host:8786), "threads" or "serial"; '
+                        "default: local worker processes, one per core")
+    p.add_argument("--records", default=None, help="records folder (default $URMX_RECORDS)")
+    p.add_argument("--batch-size", type=int, default=16,
+                   help="analyses per batch (default 16)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _command() -> str:
+    return "urmx " + " ".join(sys.argv[1:])
+
+
+def _run(args) -> int:
+    from ..study import run_study
+
+    run_study(args.study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
+              batch_size=args.batch_size, records_dir=args.records, command=_command())
+    print(args.out)
+    return 0
+
+
+def _paper(args) -> int:
+    from distributed import Client
+
+    from ..study import _client, run_study
+
+    out = Path(args.out)
+    start = time.perf_counter()
+    archives = []
+    client, owned = (None, False)
+    if args.scheduler != "serial":
+        client, owned = _client(args.scheduler)  # one cluster for all three studies
+    try:
+        for name in PAPER_STUDIES:
+            path = out / f"{name}.nc"
+            print(f"urmx paper: {name} -> {path}", file=sys.stderr)
+            run_study(name, out=path, scheduler=client if client else "serial",
+                      progress=not args.quiet, batch_size=args.batch_size,
+                      records_dir=args.records, command=_command())
+            archives.append(path)
+    finally:
+        if owned and isinstance(client, Client):
+            cluster = getattr(client, "cluster", None)
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    print(f"urmx paper: studies done in {time.perf_counter() - start:.1f} s", file=sys.stderr)
+    try:
+        from ..report import write_report
+    except ImportError:
+        print("urmx paper: urmx.report.write_report is not available yet; the archives are in "
+              f"{out}/ (run the report step when it lands)", file=sys.stderr)
+        return 0
+    write_report(archives, out)
+    print(f"urmx paper: done in {time.perf_counter() - start:.1f} s -> {out}", file=sys.stderr)
+    return 0
+
+
+def _calibrate(args) -> int:
+    from ..catalog import calibrate, calibration_report
+
+    result = calibrate()
+    b = result.building
+    print(f"least squares: wall_length = {b.wall_length:.4f} m, diaphragm_weight = "
+          f"{b.diaphragm_weight:.4f} kPa (density {b.density:g} kg m-3), "
+          f"RMS relative residual {result.rms:.4f}")
+    print(calibration_report(args.out))
+    return 0

@@ -99,7 +99,8 @@ def fourier_spectrum(trace, frequencies=None, bandwidth: float = 40.0) -> xr.Dat
     acc, dt = _series(trace)
     freq, amp = _fas(acc, dt)
     centres = np.asarray(DEFAULT_FREQUENCIES if frequencies is None else frequencies, float)
-    centres = centres[(centres > 0) & (centres <= 0.5 / dt)]
+    # below two FFT bins the smoothed spectrum is not resolved by the record length
+    centres = centres[(centres >= 2.0 / (acc.size * dt)) & (centres <= 0.5 / dt)]
     smooth = _konno_ohmachi(freq, amp, centres, bandwidth)
     return xr.DataArray(
         smooth, dims="frequency", name="fourier_amplitude",

@@ -182,7 +182,7 @@ def detect_format(path: str | os.PathLike) -> str:
         return "smc"
     if top.startswith("Origin Time") and "Scale Factor" in text:
         return "knet"
-    if re.search(r"ACCELEROGRAM", "\n".join(lines[:3]), re.I):
+    if re.search(r"(UN)?CORRECTED ACCELEROGRAM", "\n".join(lines[:2]), re.I):
         return "dmg"
     body = [ln for ln in lines[:-1] if ln.strip() and not ln.lstrip().startswith("#")]
     if body and all(_is_numeric_line(ln) for ln in body[:200]):
@@ -248,6 +248,8 @@ def _field_width(path: Path, line: str) -> tuple[int, int]:
 
 def _component(text: str) -> str:
     text = text.strip()
+    if text.isdigit():
+        return f"{int(text):03d}"
     m = re.match(r"([NS]?\d+[EW]?|\d+)\s*deg", text, re.I)
     if m:
         return f"{int(m.group(1)):03d}" if m.group(1).isdigit() else m.group(1).upper()
@@ -305,6 +307,10 @@ def _parse_geonet(path: Path, lines: list[str]) -> list[_Channel]:
         n_acc, n_vel, n_dis = ints[33], ints[34], ints[35]
         n_lines = [math.ceil(n / 10) for n in (n_acc, n_vel, n_dis)]
         start = i + 26
+        if start + sum(n_lines) > len(lines):
+            raise TruncatedRecordError(
+                path, f"component {len(channels) + 1} announces {n_acc} accelerations (+ "
+                f"{n_vel} velocities, {n_dis} displacements) but the file ends first")
         block = lines[start:start + n_lines[0]]
         values = _fixed(path, block, 8)
         unit_m = _find(r"(?:units of [\d.]+ |peak\s+-?[\d.]+ )(mm/s/s|mm/s2)", text)
@@ -415,6 +421,9 @@ def _parse_dmg(path: Path, lines: list[str]) -> list[_Channel]:
         else:
             cur.append(ln)
     if any(ln.strip() for ln in cur):
+        if blocks:  # CDMG/CSMIP files close every channel with a "/&" line
+            raise TruncatedRecordError(
+                path, f"channel {len(blocks) + 1} has no end-of-data '/&' line: file truncated")
         blocks.append(cur)
     return [_parse_dmg_block(path, b) for b in blocks if any(ln.strip() for ln in b)]
 

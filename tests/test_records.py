@@ -1,0 +1,367 @@
+"""Tests for urmx.records: readers against PROVENANCE.md, errors, measures, manifest, CLI."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import urmx.records as R
+from urmx import UrmxWarning
+from urmx.config import records_dir
+
+G = 9.80665
+
+
+@pytest.fixture(scope="module")
+def rdir() -> Path:
+    try:
+        return records_dir()
+    except FileNotFoundError:
+        pytest.skip("set URMX_RECORDS to the shared records folder")
+
+
+# -- every file of shared/records, against PROVENANCE.md ----------------------------------
+# (file, read kwargs, channel, dt [s], npts, PGA [g] from PROVENANCE.md)
+PROVENANCE = [
+    ("elcentro1940/elcentro_S00E_1940.dat", {"dt": 0.02, "unit": "cm/s2"}, "", 0.02, 2688,
+     0.3484),
+    ("elcentro1940/ELC-180", {"dt": 0.01, "unit": "g"}, "", 0.01, 3949, 0.3129),
+    ("nahanni1985/NS1-010", {"dt": 0.005, "unit": "g"}, "", 0.005, 4038, 0.9778),
+    ("bigbear1992/ce23583r_HESPERIA.RAW", {}, "090", 0.005, 12001, 0.0579),
+    ("bigbear1992/ce23583r_HESPERIA.RAW", {}, "UP", 0.005, 12001, 0.0420),
+    ("bigbear1992/ce23583r_HESPERIA.RAW", {}, "180", 0.005, 12001, 0.0906),
+    ("darfield2010/RSN6953_DARFIELD_PRPCW.AT2", {}, "W", 0.005, 10800, 0.1981),
+    ("formats/peer/RSN763_LOMAP_GIL067.AT2", {}, "067", 0.005, 7999, 0.3585),
+    ("formats/peer/RSN763_LOMAP_GIL337.AT2", {}, "337", 0.005, 7999, 0.3266),
+    ("formats/geonet/20161113_110259_WTMC_20.V1A", {}, "N28W", 0.005, 65536, 1.1243),
+    ("formats/geonet/20161113_110259_WTMC_20.V1A", {}, "S62W", 0.005, 65536, 0.9412),
+    ("formats/geonet/20161113_110259_WTMC_20.V1A", {}, "UP", 0.005, 65536, 3.2163),
+    ("formats/geonet/20161113_110259_WTMC_20.V2A", {}, "N28W", 0.02, 8192, 0.9925),
+    ("formats/geonet/20161113_110259_WTMC_20.V2A", {}, "S62W", 0.02, 8192, 0.8123),
+    ("formats/geonet/20161113_110259_WTMC_20.V2A", {}, "UP", 0.02, 8192, 1.8377),
+    ("formats/cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c", {}, "BNZ", 0.005,
+     42000, 0.0070),
+    ("formats/knet/AOM0011801241951.EW", {}, "EW", 0.01, 10200, 4.078 / 980.665),
+    ("formats/knet/AOM0011801241951.NS", {}, "NS", 0.01, 10200, 4.954 / 980.665),
+    ("formats/knet/AOM0011801241951.UD", {}, "UD", 0.01, 10200, 2.240 / 980.665),
+    ("formats/kiknet/NGNH311106302345.NS1", {}, "NS1", 0.01, 12000, 0.141 / 980.665),
+    ("formats/kiknet/NGNH311106302345.NS2", {}, "NS2", 0.01, 12000, 0.618 / 980.665),
+    ("formats/kiknet/AICH040010061330.NS2", {}, "NS2", 0.005, 28600, 5.605 / 980.665),
+    ("formats/dmg/CE89146.V1", {}, "360", 0.005, 13200, 0.0792),
+    ("formats/dmg/CE89146.V1", {}, "UP", 0.005, 13200, 0.0211),
+    ("formats/dmg/CE89146.V1", {}, "090", 0.005, 13200, 0.0453),
+    ("formats/dmg/CE89146.V2", {}, "360", 0.005, 12000, 0.0788),
+    ("formats/dmg/CE89146.V2", {}, "UP", 0.005, 12000, 0.0209),
+    ("formats/dmg/CE89146.V2", {}, "090", 0.005, 12000, 0.0451),
+    ("formats/smc/0111a.smc", {}, "360", 0.005, 6001, 0.1065),
+    ("formats/usc/017m30bt.s0a", {}, "N08W", 0.02, 1887, 0.2472),
+]
+
+
+@pytest.mark.parametrize(("file", "kwargs", "channel", "dt", "npts", "pga_g"), PROVENANCE,
+                         ids=[f"{p[0].split('/')[-1]}-{p[2]}" for p in PROVENANCE])
+def test_reads_provenance_record(rdir, file, kwargs, channel, dt, npts, pga_g):
+    st = R.read(rdir / file, **kwargs)
+    tr = st.select(channel=channel)[0] if channel else st[0]
+    assert tr.stats.delta == pytest.approx(dt, rel=1e-9)
+    assert tr.stats.npts == npts
+    assert np.abs(tr.data).max() / G == pytest.approx(pga_g, abs=6e-5, rel=1e-3)
+    assert tr.stats.units == "m/s2"
+    assert tr.stats.processing[0].startswith("urmx.records.read")
+
+
+@pytest.mark.parametrize("file", ["formats/peer/RSN763_LOMAP_GIL067.AT2",
+                                  "formats/geonet/20161113_110259_WTMC_20.V2A",
+                                  "formats/dmg/CE89146.V2", "formats/smc/0111a.smc",
+                                  "formats/usc/017m30bt.s0a"])
+def test_pga_matches_header(rdir, file):
+    """Headers that state a peak agree with the data (AT2: PROVENANCE, no header peak)."""
+    for tr in R.read(rdir / file):
+        pga = np.abs(tr.data).max()
+        header = tr.stats.record.header_pga
+        if header is None:  # PEER AT2 headers carry no peak
+            assert pga / G == pytest.approx(0.3585, abs=5e-5)
+        else:
+            assert pga == pytest.approx(header, rel=2e-3)
+
+
+@pytest.mark.parametrize(("file", "channel", "dt", "pga_g"), [
+    ("bigbear1992/NEWPORT.RAW", "090", 0.005, 0.0549),
+    ("bigbear1992/NEWPORT.RAW", "360", 0.005, 0.0432),
+    ("formats/smc/891018_1.sma-1.0444a.smc", "065", 0.001, 0.0818),
+    ("formats/usc/017m30cc.y0a", "N00W", 0.004, 0.4064),
+])
+def test_uneven_records_resampled_with_warning(rdir, file, channel, dt, pga_g):
+    with pytest.warns(UrmxWarning, match="unevenly sampled"):
+        st = R.read(rdir / file)
+    tr = st.select(channel=channel)[0]
+    assert tr.stats.delta == dt
+    assert np.abs(tr.data).max() / G == pytest.approx(pga_g, rel=0.02)
+    assert any("resampled" in step for step in tr.stats.processing)
+
+
+def test_penzien_el_centro_comment_count_warns(rdir):
+    with pytest.warns(UrmxWarning, match="1559 points but the file holds 1560"):
+        tr = R.read(rdir / "elcentro1940/elcentro.dat")[0]
+    assert (tr.stats.delta, tr.stats.npts) == (0.02, 1560)
+    assert np.abs(tr.data).max() / G == pytest.approx(0.3188, abs=5e-5)
+
+
+@pytest.mark.parametrize(("file", "match"), [
+    ("formats/cosmos/NP8040-n.1000hyfh.HNE.01.V0c", "raw digitiser counts"),
+    ("formats/dmg/CE89146.V3", "spectra, no acceleration history"),
+])
+def test_refused_files(rdir, file, match):
+    with pytest.raises(R.UnsupportedRecordError, match=match) as err:
+        R.read(rdir / file)
+    assert Path(file).name in str(err.value)
+
+
+# -- clear errors -------------------------------------------------------------------------
+
+
+@pytest.fixture
+def at2(tmp_path):
+    def make(npts_header=8, values=None, unit="G"):
+        values = np.arange(1, 9) * 0.01 if values is None else values
+        body = "\n".join("  ".join(f"{v:.7E}" for v in values[i:i + 5])
+                         for i in range(0, len(values), 5))
+        path = tmp_path / "rec.AT2"
+        path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
+                        f"ACCELERATION TIME SERIES IN UNITS OF {unit}\n"
+                        f"NPTS=  {npts_header}, DT=   .0100 SEC\n{body}\n")
+        return path
+    return make
+
+
+def test_good_synthetic_at2(at2):
+    tr = R.read(at2())[0]
+    assert tr.stats.npts == 8 and tr.stats.delta == 0.01
+    np.testing.assert_allclose(tr.data, np.arange(1, 9) * 0.01 * G, rtol=1e-12)
+
+
+@pytest.mark.parametrize(("make_kwargs", "read_kwargs", "error", "match"), [
+    ({"npts_header": 12}, {}, R.TruncatedRecordError, "announces 12 points but the file holds 8"),
+    ({"npts_header": 6}, {}, R.PointCountError, "wrong point count"),
+    ({"values": np.array([0.1, np.nan, 0.2])}, {}, R.NonFiniteError, "NaN"),
+    ({"npts_header": 3, "values": np.array([0.1, np.inf, 0.2])}, {}, R.NonFiniteError, "NaN"),
+    ({}, {"unit": "cm/s2"}, R.RecordUnitError, "states unit 'g' but unit='cm/s2'"),
+    ({}, {"unit": "gal"}, R.RecordUnitError, "not one of"),
+    ({"unit": "FURLONGS"}, {}, R.RecordUnitError, "unknown unit"),
+    ({}, {"dt": 0.02}, R.MissingTimeStepError, "file states dt=0.01"),
+    ({}, {"format": "mseed"}, R.UnknownFormatError, "ObsPy cannot read"),
+])
+def test_clear_errors(at2, make_kwargs, read_kwargs, error, match):
+    if "values" in make_kwargs and "npts_header" not in make_kwargs:
+        make_kwargs["npts_header"] = len(make_kwargs["values"])
+    path = at2(**make_kwargs)
+    with pytest.raises(error, match=match) as err:
+        R.read(path, **read_kwargs)
+    assert isinstance(err.value, ValueError)
+    assert str(path) in str(err.value)
+
+
+def test_truncated_real_files(rdir, tmp_path):
+    for name in ("formats/peer/RSN763_LOMAP_GIL067.AT2",
+                 "formats/geonet/20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2"):
+        lines = (rdir / name).read_bytes().splitlines(keepends=True)
+        cut = tmp_path / Path(name).name
+        cut.write_bytes(b"".join(lines[: len(lines) // 2 + 7]))
+        with pytest.raises(R.RecordError, match=str(cut)):
+            R.read(cut)
+
+
+def test_unknown_format_and_unit_mistakes(tmp_path, rdir):
+    junk = tmp_path / "notes.txt"
+    junk.write_text("this is not\nan accelerogram\n")
+    with pytest.raises(R.UnknownFormatError, match="unknown record format"):
+        R.read(junk)
+    empty = tmp_path / "empty.dat"
+    empty.write_text("")
+    with pytest.raises(R.UnknownFormatError, match="empty"):
+        R.read(empty)
+    src = rdir / "elcentro1940/elcentro_S00E_1940.dat"
+    with pytest.raises(R.RecordUnitError, match="unit is wrong"):
+        R.read(src, dt=0.02, unit="g")  # cm/s2 values taken for g: PGA 342 g
+    with pytest.raises(R.RecordUnitError, match="does not state its unit"):
+        R.read(src, dt=0.02)
+    with pytest.raises(R.MissingTimeStepError, match="pass dt="):
+        R.read(src, unit="cm/s2")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        R.read(tmp_path / "missing.AT2")
+
+
+# -- measures: closed forms ---------------------------------------------------------------
+
+
+def _trace(data, dt):
+    from obspy import Trace
+
+    tr = Trace(np.asarray(data, dtype=float))
+    tr.stats.delta = dt
+    return tr
+
+
+def test_arias_intensity_of_a_sine():
+    amp, f, dt, cycles = 2.0, 2.0, 0.001, 10
+    t = np.arange(int(round(cycles / f / dt)) + 1) * dt
+    ds = R.measures(_trace(amp * np.sin(2 * np.pi * f * t), dt))
+    closed = np.pi / (2 * G) * amp**2 * t[-1] / 2  # pi/(2g) * integral of A^2 sin^2
+    assert float(ds.arias_intensity) == pytest.approx(closed, rel=1e-6)
+    assert float(ds.significant_duration) == pytest.approx(0.9 * t[-1], rel=2e-3)
+    assert float(ds.pga) == pytest.approx(amp, rel=1e-6)
+    for var in ds.data_vars.values():
+        assert var.attrs["units"] and var.attrs["long_name"]
+
+
+def test_response_spectrum_zero_period_limit(rdir):
+    tr = R.load("elcentro", rdir)
+    pga = np.abs(tr.data).max()
+    rs = R.response_spectrum(tr, periods=[0.0, 1e-9])
+    assert float(rs.psa[0]) == pga
+    assert float(rs.psa[1]) == pytest.approx(pga, rel=1e-6)
+    assert float(rs.sa[1]) == pytest.approx(pga, rel=1e-6)
+    assert rs.psa.attrs["units"] == "m s-2" and rs.period.attrs["units"] == "s"
+
+
+def test_harmonic_input_at_resonance():
+    """u(t) = -(a0/w^2)/(2 zeta) [e^{-zeta w t}(cos wd t + zeta/sqrt(1-zeta^2) sin wd t)
+    - cos w t] for ground acceleration a0 sin(w t) with the oscillator at resonance."""
+    period, zeta, a0 = 0.5, 0.05, 1.0
+    w = 2 * np.pi / period
+    dt = period / 4000
+    t = np.arange(int(round(6 * period / dt)) + 1) * dt
+    u = R.sdof_displacement(a0 * np.sin(w * t), dt, period, zeta)
+    wd = w * np.sqrt(1 - zeta**2)
+    closed = -(a0 / w**2) / (2 * zeta) * (
+        np.exp(-zeta * w * t) * (np.cos(wd * t) + zeta / np.sqrt(1 - zeta**2) * np.sin(wd * t))
+        - np.cos(w * t))
+    scale = np.abs(closed).max()
+    assert np.abs(u - closed).max() / scale < 1e-6
+    rs = R.response_spectrum(_trace(a0 * np.sin(w * t), dt), periods=[period], damping=zeta)
+    assert float(rs.sd[0]) == pytest.approx(scale, rel=1e-6)
+
+
+def test_fourier_and_frequency_range_of_a_sine():
+    dt, f = 0.005, 4.0
+    t = np.arange(8000) * dt
+    tr = _trace(np.sin(2 * np.pi * f * t) * np.hanning(t.size), dt)
+    lo, hi = R.significant_frequency_range(tr)
+    assert lo < f < hi and hi - lo < 0.2
+    fas = R.fourier_spectrum(tr)
+    assert fas.attrs["units"] == "m s-1" and fas.frequency.attrs["units"] == "Hz"
+    assert float(fas.frequency[int(np.argmax(fas.values))]) == pytest.approx(f, rel=0.03)
+
+
+def test_processing_steps_recorded(rdir):
+    tr = R.load("christchurch", rdir)
+    out = R.process(tr, freqmin=0.1, freqmax=25.0, dt=0.01, target_pga=0.185 * G)
+    assert out.stats.delta == 0.01
+    assert np.abs(out.data).max() == pytest.approx(0.185 * G, rel=1e-12)
+    steps = " ".join(out.stats.processing)
+    for word in ("detrend", "taper", "filter", "resample", "urmx.records.scale"):
+        assert word in steps
+    assert len(tr.stats.processing) < len(out.stats.processing)  # input untouched
+
+
+# -- manifest -----------------------------------------------------------------------------
+
+
+def test_manifest_paper_records(rdir):
+    m = R.manifest(rdir)
+    for rid in ("elcentro", "nahanni", "christchurch", "bigbear"):
+        assert rid in m and Path(m[rid]["path"]).is_file()
+    assert sum(e["set"] == "fema-p695-far-field" for e in m.values()) == 40
+    assert "p695-01-mul009" in m
+    assert m["elcentro"]["paper_scale_factor"] == 0.5 == m["elcentro"]["scale_factor"]
+    assert m["nahanni"]["paper_scale_factor"] == 4.0 and m["nahanni"]["substitute"]
+    assert m["christchurch"]["file"] == "darfield2010/RSN6953_DARFIELD_PRPCW.AT2"
+
+
+@pytest.mark.parametrize(("rid", "npts", "dt", "pga_g", "scaled_pga_g"), [
+    ("elcentro", 2688, 0.02, 0.3484, None),
+    ("nahanni", 4038, 0.005, 0.9778, 0.92),
+    ("christchurch", 10800, 0.005, 0.1981, 0.185),
+    ("bigbear", 12001, 0.005, 0.0906, None),
+])
+def test_load_paper_records(rdir, rid, npts, dt, pga_g, scaled_pga_g):
+    tr = R.load(rid, rdir)
+    assert (tr.stats.npts, tr.stats.delta) == (npts, dt)
+    pga = np.abs(tr.data).max() / G
+    assert pga == pytest.approx(pga_g, abs=5e-5)
+    if scaled_pga_g is not None:
+        assert pga * tr.stats.record.scale_factor == pytest.approx(scaled_pga_g, rel=1e-6)
+
+
+def test_checksum_mismatch_and_missing_file(rdir, tmp_path):
+    fake = tmp_path / "elcentro1940"
+    fake.mkdir()
+    data = (rdir / "elcentro1940/elcentro_S00E_1940.dat").read_bytes()
+    (fake / "elcentro_S00E_1940.dat").write_bytes(data.replace(b"12.540", b"12.541", 1))
+    with pytest.raises(R.ChecksumError, match="elcentro_S00E_1940.dat.*satish-annigeri"):
+        R.load("elcentro", tmp_path)
+    with pytest.raises(FileNotFoundError, match="NS1-010.*maddyblue/slammer"):
+        R.load("nahanni", tmp_path)
+    with pytest.raises(R.ManifestError, match="did you mean"):
+        R.load("elcentr", tmp_path)
+
+
+def test_library_against_catalog_and_timing(rdir):
+    with open(rdir / "library/catalog.tsv") as fh:
+        catalog = {r["path"]: r for r in csv.DictReader(fh, delimiter="\t")}
+    lib = [e for e in R.manifest(rdir).values() if e["set"] == "fema-p695-far-field"]
+    assert len(lib) == len(catalog) == 40
+    start = time.perf_counter()
+    for e in lib:
+        tr = R.load(e["id"], rdir)
+        ds = R.measures(tr)
+        R.response_spectrum(tr)
+        row = catalog[e["file"].removeprefix("library/")]
+        assert tr.stats.delta == float(row["dt_s"]) and tr.stats.npts == int(row["npts"])
+        assert float(ds.pga) / G == pytest.approx(float(row["pga_g"]), abs=5e-5)
+    assert time.perf_counter() - start < 10.0
+
+
+# -- command line -------------------------------------------------------------------------
+
+
+def test_cli(rdir, tmp_path, capsys):
+    from urmx.cli import main
+
+    assert main(["records", "--records", str(rdir), "list", "--set", "paper"]) == 0
+    assert "nahanni" in capsys.readouterr().out
+    assert main(["records", "--records", str(rdir), "show", "elcentro"]) == 0
+    out = capsys.readouterr().out
+    assert "arias_intensity" in out and "0.3484 g" in out
+    assert main(["records", "show", str(rdir / "formats/dmg/CE89146.V3")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "CE89146.V3" in err and "Traceback" not in err
+    png = tmp_path / "nahanni.png"
+    assert main(["records", "--records", str(rdir), "plot", "nahanni", "--out", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+
+
+def test_plot_has_three_panels(rdir):
+    import matplotlib.pyplot as plt
+
+    from urmx.records.plot import plot_record
+
+    fig = plot_record(R.load("elcentro", rdir), paper_range_hz=(0.2, 7.0))
+    assert len(fig.axes) == 3 and len(fig.axes[1].patches) == 2
+    assert fig.axes[1].get_xlabel() == "frequency [Hz]"
+    plt.close(fig)
+
+
+def test_read_copy_elsewhere_detects_format_from_content(rdir, tmp_path):
+    """The file name carries no hint: the content decides."""
+    for src in ("formats/peer/RSN763_LOMAP_GIL067.AT2", "formats/geonet/"
+                "20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2", "formats/smc/0111a.smc"):
+        dst = tmp_path / "record.bin"
+        shutil.copy(rdir / src, dst)
+        assert R.detect_format(dst) == R.detect_format(rdir / src)
+        assert len(R.read(dst)) >= 1

@@ -365,3 +365,26 @@ def test_read_copy_elsewhere_detects_format_from_content(rdir, tmp_path):
         shutil.copy(rdir / src, dst)
         assert R.detect_format(dst) == R.detect_format(rdir / src)
         assert len(R.read(dst)) >= 1
+
+
+def test_obspy_formats_and_columns(tmp_path):
+    from obspy import Trace
+
+    tr = Trace(np.sin(np.arange(500) * 0.1) * 0.3)
+    tr.stats.delta = 0.01
+    sac = tmp_path / "rec.sac"
+    tr.write(str(sac), format="SAC")
+    with pytest.raises(R.RecordUnitError, match="does not state its unit"):
+        R.read(sac)
+    st = R.read(sac, unit="g")
+    assert st[0].stats.delta == pytest.approx(0.01)
+    np.testing.assert_allclose(st[0].data, tr.data * G, rtol=1e-6)
+    two = tmp_path / "two_columns.txt"
+    t = np.array([0.0, 0.01, 0.021, 0.03, 0.04])
+    two.write_text("\n".join(f"{a} {b}" for a, b in zip(t, [0, 1, 2, 1, 0], strict=True)))
+    with pytest.warns(UrmxWarning, match="unevenly sampled"):
+        out = R.read(two, format="slammer", unit="cm/s2", dt=0.01)[0]
+    assert out.stats.npts == 5 and out.data.max() == pytest.approx(0.01 * (1 + 10 / 11))
+    two.write_text("\n".join(f"{0.02 * k} {k}" for k in range(6)))
+    even = R.read(two, unit="m/s2")[0]  # an even time column: no warning, dt from it
+    assert even.stats.delta == pytest.approx(0.02) and even.data[-1] == 5

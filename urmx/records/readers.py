@@ -609,6 +609,9 @@ def _to_trace(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | 
                           stacklevel=3)
             processing.append(f"urmx: header comment said {n_comment} points, "
                               f"used all {values.size}")
+    elif np.allclose(np.diff(ch.times), ch.times[1] - ch.times[0], rtol=1e-6, atol=0):
+        step = float(ch.times[1] - ch.times[0])  # a time column with an even step
+        processing.append(f"urmx: time column evenly spaced, dt={step:g} s")
     else:
         values, step, msg = _resample_uneven(path, ch.times, values, dt)
         warnings.warn(f"{path}: {label} {msg}", UrmxWarning, stacklevel=3)

@@ -177,6 +177,7 @@ def test_findings_agree_on_synthetic_study(single, multi):
     assert all(r["agree"] is True for r in rows), [r for r in rows if r["agree"] is not True]
     flex = next(r for r in rows if "D1/D2" in r["finding"])
     assert "median |rho| = 0.40" in flex["computed"]  # ranks [4, 1, 3, 2]: rho = -0.4
+    assert "nahanni" not in flex["computed"]  # the paper says it of Figs. 9b, 9c only
 
 
 def test_findings_without_archives_are_not_available():

@@ -29,6 +29,7 @@ def test_full_report(tmp_path):
     # at the paper's 0.83 the nearest grid COR 0.85 gives 25 mm and 4.0 s
     assert "| west | nahanni | 0.83 | collapse_time = 5.3 | 0.8 | 0.019 | 25 | 4 |" in text
     assert "Not available" not in text
+    assert "D5 is a rigid top support here" in text
     findings = text.split("## Findings")[1]
     assert findings.count("| yes |") == 11
     assert "median \\|rho\\| = 0.40" in findings

@@ -219,6 +219,17 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
                   "of the case (2: patterns 21/22, 3: patterns 11/12) in which the governing "
                   "lower ratio was reached. The paper's Delta_ins imply building masses it "
                   "does not state (MODEL.md section 9).", ""]
+        ds = single
+        rigid = [str(d) for d in tab["diaphragm"].values
+                 if "stiffness" in ds.variables
+                 and np.isinf(float(ds["stiffness"].sel(diaphragm=d)))]
+        if rigid:
+            lines += [f"{', '.join(rigid)} is a rigid top support here (a constraint, MODEL.md "
+                      "section 6): the top does not move, so the differential (3) equals the "
+                      "crack displacement (2). The paper's 33 and 47 mm for D5 cannot both be "
+                      "segment drifts of a wall whose top is (nearly) fixed, as its 1e9 N/m "
+                      "D5 is; the paper does not say how column (3) was measured.",
+                      ""]
     _section(lines, "Table VI: stability of the wall segments", table6)
 
     def stability(ds_kind, png):

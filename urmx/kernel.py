@@ -1,0 +1,1119 @@
+"""The exact event-driven integrator (MODEL.md sections 4-10), numpy/numba only.
+
+Method
+------
+Between two events the reduced system ``M r_dd + C r_d + K r + R0 = -G xg_dd(t)`` is
+linear with constant coefficients, and inside one record step the forcing is linear in
+time. Its solution is an entire function of time, so:
+
+* Each piece (family, lower branch, upper branch) gets a *mode*: ``M^-1 K``, ``M^-1 C``,
+  ``M^-1 R0``, ``M^-1 G`` and the exact propagator over a sub-step ``h = dt/nsub``
+  (state-transition matrix plus the responses to the constant, ramp and resistance
+  forcing), built once per wall and record step and cached.
+  ``nsub`` is the smallest integer with ``nu*h <= 1``, ``nu = sqrt(|M^-1 K|) + |M^-1 C|``
+  bounding the piece's frequencies (1 for soft walls; a 1e9 N/m spring needs more).
+* Whole sub-steps are stepped by one matrix-vector product (exact to round-off).
+* Where an event function changes sign on a sub-step, or may dip through zero between
+  its ends (a cubic Hermite estimate from the exact values and rates at both ends says it
+  might), or where a peak output may have an interior extremum above its running peak,
+  the exact solution on that sub-step is expanded in its Taylor series about the
+  sub-step start. With ``nu*h <= 1`` the series converges to round-off in 10-30 terms
+  and the roots of event functions, their times, and the states there are found on it
+  by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
+  The state at an event is the series summed at the event time, not an interpolant.
+
+Event semantics (contacts, the opening rule, impacts and their laws, merged impacts,
+branch changes, collapse) live in the small functions below and are shared with the
+scipy reference solver in :mod:`urmx.reference`.
+
+Documented choices
+------------------
+* Event times are located to ``TIME_TOL = 1e-12 s`` (bracket width).
+* Opening rule (MODEL.md section 4): both contacts start closed; a closed contact opens
+  when ``|g|`` exceeds ``g_open = 1e-6 * theta_a(Case 2)``, taking the side of ``g``.
+  With a flexible base the side on which the wall departs is decided by high-order
+  terms, and in a few percent of walls the result depends on this rule.
+* A contact that an impact leaves with ``|g_d| < v_rest = g_open/dt`` is closed again.
+* Impacts closer than the window ``w`` (default 1e-6 s) are merged (section 7).
+* At most ``MAX_EVENTS_PER_STEP`` events in one record step; beyond that the run stops
+  with status ``event-limit``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+
+import numpy as np
+from numba import njit
+
+from .model import (P_A1, P_A2, P_CASE, P_RIGID_B, P_RIGID_T, Wall, classify, curve,
+                    lower_case, n_dof, system, transform)
+from .variables import INTEGER_SCALARS, SCALARS
+
+KMAX = 48  # most Taylor terms a sub-step may need
+RHO = 1.0  # nu*h bound of a sub-step
+GATE = 0.05  # refine an interior extremum when the Hermite estimate is within 5 % of the peak
+TIME_TOL = 1e-12  # event time tolerance [s]
+MAX_EVENTS_PER_STEP = 200
+WINDOW = 1e-6  # merged-impact window w [s]
+G_OPEN_FACTOR = 1e-6
+
+NMODES = 50
+# rows over q = [theta1, theta2, u_b] of the quantities the kernel watches
+ROW_T1, ROW_T2, ROW_UB, ROW_UC, ROW_UT, ROW_GC = range(6)
+# peak trackers (the first N_DISP act on r, the rest on r_dd plus the ground)
+TR_UB, TR_UC, TR_UT, TR_D1, TR_D2, TR_RL, TR_RU, TR_AB, TR_AC, TR_AT = range(10)
+N_TRACK = 10
+N_DISP = 7
+# integer state
+I_FAM, I_S, I_C, I_BOPEN, I_COPEN, I_BL, I_BU = range(7)
+N_IST = 7
+# event kinds
+EV_BASE_IMPACT, EV_CRACK_IMPACT, EV_BASE_OPEN, EV_CRACK_OPEN = 0, 1, 2, 3
+EV_LOWER, EV_UPPER, EV_COLLAPSE_LOWER, EV_COLLAPSE_UPPER = 4, 5, 6, 7
+MAX_EV = 8
+# status codes
+ST_OK, ST_COLLAPSED, ST_EVENT_LIMIT = 0, 1, 2
+STATUS = ("ok", "collapsed", "event-limit")
+LAWS = {"scale": 0, "contact": 1}
+# scalar outputs of _integrate (index order)
+O_COLLAPSE_T, O_FAM1_TIME, O_DURATION, O_BASE_IMP, O_CRACK_IMP, O_EVENTS = range(6)
+N_OUT = 6
+
+
+# ---- shared event semantics -----------------------------------------------------------
+
+@njit(cache=True)
+def watch_rows(P):
+    """Rows over the reduced coordinates r of theta1, theta2, u_b, u_c, u_t, g_crack.
+
+    Outputs fixed by a constraint get exactly zero rows (MODEL.md section 6)."""
+    a1, a2 = P[P_A1], P[P_A2]
+    Lq = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [a1, 0.0, 1.0],
+                   [a1, a2, 1.0], [-1.0, 1.0, 0.0]])
+    L = Lq @ transform(P)
+    if P[P_RIGID_B] > 0.5:
+        L[ROW_UB, :] = 0.0
+    if P[P_RIGID_T] > 0.5:
+        L[ROW_UT, :] = 0.0
+    return L
+
+
+@njit(cache=True)
+def tracker_rows(P, L, fam, out):
+    """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
+    a1, a2 = P[P_A1], P[P_A2]
+    th0l = curve(P, lower_case(fam))[1]
+    th01 = curve(P, 1)[1]
+    out[TR_UB, :] = L[ROW_UB]
+    out[TR_UC, :] = L[ROW_UC]
+    out[TR_UT, :] = L[ROW_UT]
+    out[TR_D1, :] = a1 * L[ROW_T1]
+    out[TR_D2, :] = a2 * L[ROW_T2]
+    out[TR_RL, :] = L[ROW_T1] / th0l
+    out[TR_RU, :] = L[ROW_T2] / th01
+    out[TR_AB, :] = L[ROW_UB]
+    out[TR_AC, :] = L[ROW_UC]
+    out[TR_AT, :] = L[ROW_UT]
+
+
+@njit(cache=True)
+def mode_index(fam, bl, bu):
+    return (fam - 1) * 25 + (bl + 2) * 5 + (bu + 2)
+
+
+@njit(cache=True)
+def _branch_events(P, case, b, row, kind_branch, kind_collapse, k, rows, sig, kap, kind, tgt):
+    """Event functions e = sig*(row.r) + kap (event when e falls through 0) bounding the
+    signed branch b; signed boundaries, so passing through zero is never missed."""
+    M0, th0, Mi, ta, tb = curve(P, case)
+    if b == 0:
+        for sg in (1, -1):  # reaching +theta_a, -theta_a
+            rows[k, :] = row
+            sig[k] = -sg
+            kap[k] = ta
+            kind[k] = kind_branch
+            tgt[k] = sg
+            k += 1
+        return k
+    sg = 1 if b > 0 else -1
+    inner = ta if abs(b) == 1 else tb
+    outer = tb if abs(b) == 1 else th0
+    rows[k, :] = row
+    sig[k] = sg
+    kap[k] = -inner
+    kind[k] = kind_branch
+    tgt[k] = 0 if abs(b) == 1 else sg
+    k += 1
+    rows[k, :] = row
+    sig[k] = -sg
+    kap[k] = outer
+    kind[k] = kind_branch if abs(b) == 1 else kind_collapse
+    tgt[k] = 2 * sg
+    k += 1
+    return k
+
+
+@njit(cache=True)
+def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
+    """The event functions of the current piece; returns how many."""
+    k = 0
+    for which in range(2):
+        row = L[ROW_T1] if which == 0 else L[ROW_GC]
+        side = ist[I_S] if which == 0 else ist[I_C]
+        is_open = ist[I_BOPEN] if which == 0 else ist[I_COPEN]
+        if is_open:
+            rows[k, :] = row  # impact when side*g falls to zero
+            sig[k] = side
+            kap[k] = 0.0
+            kind[k] = EV_BASE_IMPACT if which == 0 else EV_CRACK_IMPACT
+            tgt[k] = 0
+            k += 1
+        else:
+            for sg in (1, -1):  # opening when |g| exceeds g_open
+                rows[k, :] = row
+                sig[k] = -sg
+                kap[k] = g_open
+                kind[k] = EV_BASE_OPEN if which == 0 else EV_CRACK_OPEN
+                tgt[k] = sg
+                k += 1
+    if ist[I_BOPEN] and ist[I_COPEN] and P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5:
+        k -= 1  # both supports rigid: the two contacts are one coordinate, one impact
+    k = _branch_events(P, lower_case(ist[I_FAM]), ist[I_BL], L[ROW_T1], EV_LOWER,
+                       EV_COLLAPSE_LOWER, k, rows, sig, kap, kind, tgt)
+    k = _branch_events(P, 1, ist[I_BU], L[ROW_T2], EV_UPPER, EV_COLLAPSE_UPPER, k, rows,
+                       sig, kap, kind, tgt)
+    return k
+
+
+@njit(cache=True)
+def set_family(P, ist, r, v, L):
+    """Family from the pivot sides; a family change reclassifies the lower branch.
+    Returns True when |theta1| is at or beyond the new case's theta0 (immediate collapse)."""
+    fam = 1 if ist[I_S] == ist[I_C] else 2
+    th1 = np.dot(L[ROW_T1], r)
+    if fam != ist[I_FAM]:
+        ist[I_FAM] = fam
+        case = lower_case(fam)
+        ist[I_BL] = classify(P, case, th1, np.dot(L[ROW_T1], v))
+        if abs(th1) >= curve(P, case)[1]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def impact_velocity(P, L, v, base, crack, cor, law, Minv):
+    """Velocity jump of an impact in reduced coordinates.
+
+    scale: every rotational component times cor (an independent u_b rate unchanged).
+    contact: v+ = v- + Minv J^T lam with J v+ = cor * J v- (generalised Newton law),
+    Minv of the pattern after the impact; parallel rows (both supports rigid) use one."""
+    n = v.shape[0]
+    if law == 0:
+        nrot = 2 if n == 3 else n
+        for i in range(nrot):
+            v[i] *= cor
+        return
+    m = int(base) + int(crack)
+    J = np.zeros((m, n))
+    j = 0
+    if base:
+        J[j, :] = L[ROW_T1]
+        j += 1
+    if crack:
+        J[j, :] = L[ROW_GC]
+    A = J @ Minv @ J.T
+    if m == 2:
+        det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+        if abs(det) <= 1e-12 * abs(A[0, 0] * A[1, 1]):
+            J = J[:1, :].copy()
+            A = J @ Minv @ J.T
+    rhs = (cor - 1.0) * (J @ v)
+    lam = np.linalg.solve(A, rhs)
+    dv = Minv @ (J.T @ lam)
+    for i in range(n):
+        v[i] += dv[i]
+
+
+@njit(cache=True)
+def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, MR, MG,
+                 Minv, v_rest, counts):
+    """Carry out one event at the current state (shared by both solvers).
+
+    Updates the integer state ist and the velocities v in place and counts impacts.
+    Returns 0, or 1 / 2 when the lower / upper segment collapses (terminal)."""
+    if kd == EV_COLLAPSE_LOWER:
+        return 1
+    if kd == EV_COLLAPSE_UPPER:
+        return 2
+    if kd == EV_LOWER:
+        ist[I_BL] = target
+        return 0
+    if kd == EV_UPPER:
+        ist[I_BU] = target
+        return 0
+    if kd == EV_BASE_OPEN or kd == EV_CRACK_OPEN:
+        # a closed joint opens on the side of g, without an impact (MODEL.md section 4)
+        if kd == EV_BASE_OPEN:
+            ist[I_BOPEN] = 1
+            ist[I_S] = target
+        else:
+            ist[I_COPEN] = 1
+            ist[I_C] = target
+        return 1 if set_family(P, ist, r, v, L) else 0
+    base = kd == EV_BASE_IMPACT
+    crack = kd == EV_CRACK_IMPACT
+    if P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5:
+        base = True  # both supports rigid: the two joints close together, one impact
+        crack = True
+    else:
+        # merged impact: the other open joint, continued on the motion before the
+        # impact, closes within the window w (MODEL.md section 7)
+        other_open = ist[I_COPEN] if base else ist[I_BOPEN]
+        if other_open:
+            row = L[ROW_GC] if base else L[ROW_T1]
+            side = ist[I_C] if base else ist[I_S]
+            eo = side * np.dot(row, r)
+            edo = side * np.dot(row, v)
+            eddo = side * _row_acc(row, MK, MC, MR, MG, r, v, ag_now)
+            if edo < 0.0 and eo + edo * window + 0.5 * eddo * window * window <= 0.0:
+                base = True
+                crack = True
+    # the pivots move to the other faces; the contact law uses the pattern after
+    if base:
+        ist[I_S] = -ist[I_S]
+        counts[0] += 1
+    if crack:
+        ist[I_C] = -ist[I_C]
+        counts[1] += 1
+    if law == 1:
+        fam_after = 1 if ist[I_S] == ist[I_C] else 2
+        impact_velocity(P, L, v, base, crack, cor, law, system(P, fam_after, 0, 0)[5])
+    else:
+        impact_velocity(P, L, v, base, crack, cor, law, Minv)
+    # a joint left slower than v_rest is closed again, under the opening rule
+    if base and abs(np.dot(L[ROW_T1], v)) < v_rest:
+        ist[I_BOPEN] = 0
+    if crack and abs(np.dot(L[ROW_GC], v)) < v_rest:
+        ist[I_COPEN] = 0
+    return 1 if set_family(P, ist, r, v, L) else 0
+
+
+# ---- numerics: modes, Taylor series, scalar polynomials -------------------------------
+
+@njit(cache=True)
+def _norm_inf(A):
+    best = 0.0
+    for i in range(A.shape[0]):
+        s = 0.0
+        for j in range(A.shape[1]):
+            s += abs(A[i, j])
+        best = max(best, s)
+    return best
+
+
+@njit(cache=True)
+def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
+    """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
+    r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t). Returns the number of terms."""
+    n = r0.shape[0]
+    big = 0.0
+    for i in range(n):
+        D[0, i] = r0[i]
+        D[1, i] = v0[i] * h
+        big = max(big, abs(D[0, i]), abs(D[1, i]))
+    m = 2
+    for j in range(KMAX - 2):
+        c = h * h / ((j + 1.0) * (j + 2.0))
+        q = (j + 1.0) / h
+        mx = 0.0
+        for i in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc -= MK[i, k] * D[j, k] + q * MC[i, k] * D[j + 1, k]
+            if j == 0:
+                acc -= MR[i] + MG[i] * a0
+            elif j == 1:
+                acc -= MG[i] * beta * h
+            val = c * acc
+            D[j + 2, i] = val
+            mx = max(mx, abs(val))
+        m = j + 3
+        big = max(big, mx)
+        if j >= 3:
+            prev = 0.0
+            for i in range(n):
+                prev = max(prev, abs(D[j + 1, i]))
+            if (mx + prev) * (j + 2.0) ** 3 <= 1e-17 * big:
+                break
+    return m
+
+
+@njit(cache=True)
+def _sum_state(D, m, s, h, r, v):
+    """r(s h) and r_d(s h) from the Taylor coefficients."""
+    n = r.shape[0]
+    for i in range(n):
+        p = D[m - 1, i]
+        dp = 0.0
+        for j in range(m - 2, -1, -1):
+            dp = dp * s + p
+            p = p * s + D[j, i]
+        r[i] = p
+        v[i] = dp / h
+
+
+@njit(cache=True)
+def _scalar_poly(row, D, m, acc_kind, h, a0, beta, sig, kap, cf):
+    """Coefficients in s = t/h of sig*row.r + kap (displacement kind) or of
+    row.r_dd + xg_dd (acceleration kind). Returns their number."""
+    n = row.shape[0]
+    if not acc_kind:
+        for j in range(m):
+            s = 0.0
+            for i in range(n):
+                s += row[i] * D[j, i]
+            cf[j] = sig * s
+        cf[0] += kap
+        return m
+    for j in range(m - 2):
+        s = 0.0
+        for i in range(n):
+            s += row[i] * D[j + 2, i]
+        cf[j] = (j + 2.0) * (j + 1.0) * s / (h * h)
+    cf[0] += a0
+    cf[1] += beta * h
+    return m - 2
+
+
+@njit(cache=True)
+def _peval(cf, m, s):
+    p = cf[m - 1]
+    dp = 0.0
+    ddp = 0.0
+    for j in range(m - 2, -1, -1):
+        ddp = ddp * s + dp
+        dp = dp * s + p
+        p = p * s + cf[j]
+    return p, dp, 2.0 * ddp
+
+
+@njit(cache=True)
+def _solve(cf, m, lo, hi, deriv, tol, guess):
+    """Bracketed Newton on f = poly (deriv=0) or poly' (deriv=1) over [lo, hi] where f
+    changes sign; stops on the bracket width. Returns (a, b): f(a) has the sign of
+    f(lo), f(b) that of f(hi), and |b - a| <= tol."""
+    p, dp, ddp = _peval(cf, m, lo)
+    flo = p if deriv == 0 else dp
+    orient = 1.0 if flo < 0.0 else -1.0  # oriented f: negative at lo
+    a, b = lo, hi
+    x = guess if lo < guess < hi else 0.5 * (lo + hi)
+    for _ in range(100):
+        p, dp, ddp = _peval(cf, m, x)
+        f = orient * (p if deriv == 0 else dp)
+        df = orient * (dp if deriv == 0 else ddp)
+        if f == 0.0:
+            return x, x
+        if f < 0.0:
+            a = x
+        else:
+            b = x
+        if b - a <= tol:
+            break
+        xn = x - f / df if df != 0.0 else 0.5 * (a + b)
+        if not (a < xn < b):
+            xn = 0.5 * (a + b)
+        if abs(xn - x) < 0.5 * tol:  # close the bracket from the other side
+            xn = x + 0.5 * tol if f < 0.0 else x - 0.5 * tol
+            xn = min(max(xn, a), b)
+        x = xn
+    return a, b
+
+
+@njit(cache=True)
+def _positive_max(cf, m):
+    """For a polynomial starting at or below zero with a positive slope and ending at or
+    below zero: the point of its first maximum if that maximum is positive, else -1."""
+    ns = 16
+    d_prev = _peval(cf, m, 0.0)[1]
+    s_prev = 0.0
+    for i in range(1, ns + 1):
+        s = i / ns
+        d = _peval(cf, m, s)[1]
+        if d_prev > 0.0 and d <= 0.0:
+            a, b = _solve(cf, m, s_prev, s, 1, 1e-14, 0.5 * (s_prev + s))
+            sm = 0.5 * (a + b)
+            return sm if _peval(cf, m, sm)[0] > 0.0 else -1.0
+        d_prev, s_prev = d, s
+    return -1.0
+
+
+@njit(cache=True)
+def _first_nonpositive(cf, m, single_min):
+    """A point s in (0, 1] where the polynomial (positive at 0) is <= 0, at or before
+    its first interior minimum that reaches zero; 2.0 when it stays positive.
+
+    single_min: the Hermite test found one interior minimum; otherwise the interval is
+    scanned at 16 points and every local minimum between them is located exactly."""
+    if single_min:
+        a, b = _solve(cf, m, 0.0, 1.0, 1, 1e-14, 0.5)
+        s = 0.5 * (a + b)
+        return s if _peval(cf, m, s)[0] <= 0.0 else 2.0
+    ns = 16
+    p_prev, d_prev, _ = _peval(cf, m, 0.0)
+    s_prev = 0.0
+    for i in range(1, ns + 1):
+        s = i / ns
+        p, d, _ = _peval(cf, m, s)
+        if p <= 0.0:
+            return s
+        if d_prev < 0.0 and d > 0.0:
+            a, b = _solve(cf, m, s_prev, s, 1, 1e-14, 0.5 * (s_prev + s))
+            sm = 0.5 * (a + b)
+            if _peval(cf, m, sm)[0] <= 0.0:
+                return sm
+        p_prev, d_prev, s_prev = p, d, s
+    return 2.0
+
+
+@njit(cache=True)
+def _hermite_ext(p0, p1, m0, m1):
+    """Interior extrema of the cubic Hermite interpolant on [0, 1]: (min, max, s_min,
+    s_max); +inf/-inf when none."""
+    A = 6.0 * p0 + 3.0 * m0 - 6.0 * p1 + 3.0 * m1
+    B = -6.0 * p0 - 4.0 * m0 + 6.0 * p1 - 2.0 * m1
+    C = m0
+    lo, hi, slo, shi = np.inf, -np.inf, 0.5, 0.5
+    roots = np.empty(2)
+    nr = 0
+    if abs(A) < 1e-300:
+        if B != 0.0:
+            roots[0] = -C / B
+            nr = 1
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0:
+            sq = math.sqrt(disc)
+            qq = -0.5 * (B + (sq if B >= 0 else -sq))
+            if qq != 0.0:
+                roots[0] = qq / A
+                roots[1] = C / qq
+                nr = 2
+            else:
+                roots[0] = 0.0
+                nr = 1
+    for i in range(nr):
+        s = roots[i]
+        if 0.0 < s < 1.0:
+            s2 = s * s
+            s3 = s2 * s
+            val = ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0
+                   + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1)
+            if val < lo:
+                lo, slo = val, s
+            if val > hi:
+                hi, shi = val, s
+    return lo, hi, slo, shi
+
+
+@njit(cache=True)
+def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D):
+    """Fill the cached tables of one piece: M^-1 K, M^-1 C, M^-1, M^-1 R0, M^-1 G and the
+    exact propagator over h = dt/nsub (state transition E and the responses to the
+    resistance, constant and ramp forcing), each column summed from its Taylor series."""
+    M, C, K, R0, MinvG, Minv = system(P, fam, bl, bu)
+    n = M.shape[0]
+    MK = Minv @ K
+    MC = Minv @ C
+    MR = Minv @ R0
+    mats[idx, 0] = MK
+    mats[idx, 1] = MC
+    mats[idx, 2] = Minv
+    vecs[idx, 0] = MR
+    vecs[idx, 1] = MinvG
+    nu = math.sqrt(_norm_inf(MK)) + _norm_inf(MC)
+    ns = max(1, int(math.ceil(nu * dt / RHO)))
+    nsub[idx] = ns
+    h = dt / ns
+    z = np.zeros(n)
+    e = np.zeros(n)
+    r = np.zeros(n)
+    v = np.zeros(n)
+    for col in range(2 * n):
+        e[:] = 0.0
+        z[:] = 0.0
+        if col < n:
+            e[col] = 1.0
+            m = _taylor(MK, MC, z, z, e, z, 0.0, 0.0, h, D)
+        else:
+            e[col - n] = 1.0
+            m = _taylor(MK, MC, z, z, z, e, 0.0, 0.0, h, D)
+        _sum_state(D, m, 1.0, h, r, v)
+        prop[idx, :n, col] = r
+        prop[idx, n:, col] = v
+    for which in range(3):
+        if which == 0:
+            m = _taylor(MK, MC, MR, z, z, z, 0.0, 0.0, h, D)
+        elif which == 1:
+            m = _taylor(MK, MC, z, MinvG, z, z, 1.0, 0.0, h, D)
+        else:
+            m = _taylor(MK, MC, z, MinvG, z, z, 0.0, 1.0, h, D)
+        _sum_state(D, m, 1.0, h, r, v)
+        pvec[idx, which, :n] = r
+        pvec[idx, which, n:] = v
+    ready[idx] = True
+
+
+# ---- the integrator ---------------------------------------------------------------------
+
+@njit(cache=True)
+def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der):
+    """Tracker values and rates at one instant (accelerations absolute)."""
+    n = r.shape[0]
+    acc = np.empty(n)
+    jerk = np.empty(n)
+    for i in range(n):
+        s = -MR[i] - MG[i] * ag
+        for k in range(n):
+            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
+        acc[i] = s
+    for i in range(n):
+        s = -MG[i] * beta
+        for k in range(n):
+            s -= MK[i, k] * v[k] + MC[i, k] * acc[k]
+        jerk[i] = s
+    for t in range(N_TRACK):
+        a = 0.0
+        b = 0.0
+        if t < N_DISP:
+            for k in range(n):
+                a += TR[t, k] * r[k]
+                b += TR[t, k] * v[k]
+        else:
+            for k in range(n):
+                a += TR[t, k] * acc[k]
+                b += TR[t, k] * jerk[k]
+            a += ag
+            b += beta
+        val[t] = a
+        der[t] = b
+
+
+@njit(cache=True)
+def _events_at(rows, sig, kap, ne, r, v, e, ed):
+    n = r.shape[0]
+    for k in range(ne):
+        a = 0.0
+        b = 0.0
+        for i in range(n):
+            a += rows[k, i] * r[i]
+            b += rows[k, i] * v[i]
+        e[k] = sig[k] * a + kap[k]
+        ed[k] = sig[k] * b
+
+
+@njit(cache=True)
+def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop, pvec,
+               peaks, outs, hist, want_hist, evlog):
+    """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
+    Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist, hist[k, :] at every grid
+    point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t, pattern, then r, v).
+    Returns a status code."""
+    n = n_dof(P)
+    N = ag.shape[0]
+    nsteps = N - 1 + ntail
+    L = watch_rows(P)
+    TR = np.zeros((N_TRACK, n))
+    D = np.zeros((KMAX, n))
+    cf = np.zeros(KMAX)
+    ist = np.zeros(N_IST, np.int64)
+    rows = np.zeros((MAX_EV, n))
+    sig = np.zeros(MAX_EV)
+    kap = np.zeros(MAX_EV)
+    kind = np.zeros(MAX_EV, np.int64)
+    tgt = np.zeros(MAX_EV, np.int64)
+    e_a = np.zeros(MAX_EV)
+    ed_a = np.zeros(MAX_EV)
+    e_b = np.zeros(MAX_EV)
+    ed_b = np.zeros(MAX_EV)
+    val_a = np.zeros(N_TRACK)
+    der_a = np.zeros(N_TRACK)
+    val_b = np.zeros(N_TRACK)
+    der_b = np.zeros(N_TRACK)
+    r = np.zeros(n)
+    v = np.zeros(n)
+    rb = np.zeros(n)
+    vb = np.zeros(n)
+    xa = np.zeros(2 * n)
+    g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
+    v_rest = g_open / dt
+    # start: at rest, family 2, provisional sides against the first ground motion
+    first = 0.0
+    for k in range(N):
+        if ag[k] != 0.0:
+            first = ag[k]
+            break
+    ist[I_S] = -1 if first > 0 else 1
+    ist[I_C] = -ist[I_S]
+    ist[I_FAM] = 2
+    ist[I_BOPEN] = 0
+    ist[I_COPEN] = 0
+    ist[I_BL] = 0
+    ist[I_BU] = 0
+    for t in range(N_TRACK):
+        peaks[t] = 0.0
+    for k in range(N_OUT):
+        outs[k] = 0.0
+    outs[O_COLLAPSE_T] = np.nan
+    status = ST_OK
+    fam1_time = 0.0
+    n_events = 0
+    counts = np.zeros(2, np.int64)  # base, crack impacts
+    t_end = nsteps * dt
+    tracker_rows(P, L, ist[I_FAM], TR)
+    mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
+    if not ready[mid]:
+        _build_mode(P, ist[I_FAM], ist[I_BL], ist[I_BU], dt, mid, ready, nsub, mats, vecs,
+                    prop, pvec, D)
+    ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
+    a_now = ag[0] if N > 0 else 0.0
+    beta0 = (ag[1] - ag[0]) / dt if N > 1 else 0.0
+    _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, a_now, beta0,
+           val_a, der_a)
+    for t in range(N_TRACK):
+        peaks[t] = max(peaks[t], abs(val_a[t]))
+    if want_hist:
+        _record(hist, 0, L, ist, r, v, val_a, n)
+    duration = t_end
+    done = False
+    for step in range(nsteps):
+        if step < N - 1:
+            alpha = ag[step]
+            beta = (ag[step + 1] - ag[step]) / dt
+        else:
+            alpha = 0.0
+            beta = 0.0
+        t0 = step * dt
+        tau = 0.0
+        ev_here = 0
+        # values and rates at the step start, in this step's forcing
+        _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, alpha, beta,
+               val_a, der_a)
+        _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
+        while True:
+            ns = nsub[mid]
+            h_sub = dt / ns
+            # end of this sub-step: the next multiple of h_sub (the step end at most)
+            j = int(math.floor(tau / h_sub + 1e-9)) + 1
+            tb = dt if j >= ns else j * h_sub
+            H = tb - tau
+            if H <= 1e-15 * dt:
+                break
+            a0 = alpha + beta * tau
+            MK = mats[mid, 0]
+            MC = mats[mid, 1]
+            MR = vecs[mid, 0]
+            MG = vecs[mid, 1]
+            full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
+            m_taylor = 0
+            if full:
+                E = prop[mid]
+                for i in range(n):
+                    xa[i] = r[i]
+                    xa[n + i] = v[i]
+                for i in range(n):
+                    s1 = pvec[mid, 0, i] + a0 * pvec[mid, 1, i] + beta * pvec[mid, 2, i]
+                    s2 = (pvec[mid, 0, n + i] + a0 * pvec[mid, 1, n + i]
+                          + beta * pvec[mid, 2, n + i])
+                    for k in range(2 * n):
+                        s1 += E[i, k] * xa[k]
+                        s2 += E[n + i, k] * xa[k]
+                    rb[i] = s1
+                    vb[i] = s2
+            else:
+                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+                _sum_state(D, m_taylor, 1.0, H, rb, vb)
+            _events_at(rows, sig, kap, ne, rb, vb, e_b, ed_b)
+            # earliest event on [tau, tb]
+            s_ev = 2.0
+            k_ev = -1
+            for k in range(ne):
+                opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
+                crossing = e_a[k] > 0.0 and e_b[k] <= 0.0
+                # started on (or just behind) zero moving inward, and ends at or behind
+                # it again: it rose and fell back (after an impact, a merged impact)
+                rebound = e_a[k] <= 0.0 and ed_a[k] > 0.0 and e_b[k] <= 0.0
+                dip = False
+                if opening:
+                    # a tiny threshold (g_open) can be crossed and recrossed within a
+                    # sub-step, with zero rate at the start (at rest): scan the series
+                    dip = not crossing and e_a[k] > 0.0
+                elif not crossing and e_a[k] > 0.0 and e_b[k] > 0.0 and ed_a[k] < 0.0 \
+                        and ed_b[k] > 0.0:
+                    lo, hi, slo, shi = _hermite_ext(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
+                    dip = lo < 0.25 * max(e_a[k], e_b[k])
+                if not (crossing or dip or rebound):
+                    continue
+                if m_taylor == 0:
+                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+                mc = _scalar_poly(rows[k], D, m_taylor, False, H, 0.0, 0.0, sig[k], kap[k], cf)
+                s_lo = 0.0
+                s_hi = 1.0
+                if rebound:
+                    s_lo = _positive_max(cf, mc)
+                    if s_lo < 0.0 or s_lo >= s_ev:
+                        continue
+                if dip:
+                    # the exact first point where e <= 0 on the sub-step, if any
+                    s_hi = _first_nonpositive(cf, mc, ed_a[k] < 0.0 and not opening)
+                    if s_hi > 1.0:
+                        continue
+                if s_hi > s_ev:
+                    # only an earlier root matters: has e already crossed at s_ev?
+                    if _peval(cf, mc, s_ev)[0] > 0.0:
+                        continue
+                    s_hi = s_ev
+                tol = min(TIME_TOL / H, 1e-3)
+                lo_, hi_ = _solve(cf, mc, s_lo, s_hi, 0, tol, 0.5 * (s_lo + s_hi))
+                s_root = hi_  # the side where the event function has crossed
+                if s_root < s_ev or k_ev < 0:
+                    s_ev = s_root
+                    k_ev = k
+            if k_ev < 0:
+                # no event: peaks over the sub-step, then advance
+                _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b)
+                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, H, m_taylor, D, cf,
+                                       MK, MC, MR, MG, r, v, a0, beta)
+                if ist[I_FAM] == 1:
+                    fam1_time += H
+                tau = tb
+                for i in range(n):
+                    r[i] = rb[i]
+                    v[i] = vb[i]
+                for t in range(N_TRACK):
+                    val_a[t] = val_b[t]
+                    der_a[t] = der_b[t]
+                for k in range(ne):
+                    e_a[k] = e_b[k]
+                    ed_a[k] = ed_b[k]
+                if tb >= dt:
+                    break
+                continue
+            # ---- an event at tau + s_ev*H ----
+            if m_taylor == 0:
+                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+            He = s_ev * H
+            _sum_state(D, m_taylor, s_ev, H, rb, vb)
+            te_loc = tau + He
+            _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b)
+            if He > 0.0:
+                # peaks on [tau, te] (the one-sided values before the event included);
+                # the series about tau is re-expanded over the shorter interval
+                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, He, 0, D, cf,
+                                       MK, MC, MR, MG, r, v, a0, beta)
+            if ist[I_FAM] == 1:
+                fam1_time += He
+            tau = te_loc
+            for i in range(n):
+                r[i] = rb[i]
+                v[i] = vb[i]
+            # handle this event and every other one due at the same instant
+            while k_ev >= 0:
+                if n_events < evlog.shape[0]:
+                    evlog[n_events, 0] = t0 + tau
+                    evlog[n_events, 1] = kind[k_ev]
+                    evlog[n_events, 2] = tgt[k_ev]
+                n_events += 1
+                ev_here += 1
+                if ev_here > MAX_EVENTS_PER_STEP:
+                    status = ST_EVENT_LIMIT
+                    break
+                code = handle_event(P, L, ist, kind[k_ev], tgt[k_ev], r, v, cor, law, window,
+                                    alpha + beta * tau, MK, MC, MR, MG, mats[mid, 2], v_rest,
+                                    counts)
+                collapse_now = code != 0
+                if code == 1:
+                    peaks[TR_RL] = 1.0
+                elif code == 2:
+                    peaks[TR_RU] = 1.0
+                if collapse_now:
+                    status = ST_COLLAPSED
+                    break
+                # new piece
+                tracker_rows(P, L, ist[I_FAM], TR)
+                mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
+                if not ready[mid]:
+                    _build_mode(P, ist[I_FAM], ist[I_BL], ist[I_BU], dt, mid, ready, nsub, mats,
+                                vecs, prop, pvec, D)
+                ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
+                MK = mats[mid, 0]
+                MC = mats[mid, 1]
+                MR = vecs[mid, 0]
+                MG = vecs[mid, 1]
+                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a)
+                for t in range(N_TRACK):  # the one-sided values after the event
+                    peaks[t] = max(peaks[t], abs(val_a[t]))
+                _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
+                # a boundary reached at the same instant and moving outward fires now
+                k_ev = -1
+                for k in range(ne):
+                    if e_a[k] <= 0.0 and ed_a[k] < 0.0:
+                        k_ev = k
+                        break
+            if status != ST_OK:
+                done = True
+                duration = t0 + tau
+                if status == ST_COLLAPSED:
+                    outs[O_COLLAPSE_T] = t0 + tau
+                break
+        if done:
+            break
+        if step == N - 2:
+            # the record ends: the right-hand limit of the absolute accelerations (xg_dd = 0)
+            _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, 0.0, 0.0,
+                   val_b, der_b)
+            for t in range(N_DISP, N_TRACK):
+                peaks[t] = max(peaks[t], abs(val_b[t]))
+        if want_hist:
+            a_grid = ag[step + 1] if step + 1 < N else 0.0
+            b_grid = 0.0
+            _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, a_grid,
+                   b_grid, val_b, der_b)
+            _record(hist, step + 1, L, ist, r, v, val_b, n)
+    if status == ST_COLLAPSED:
+        peaks[TR_RL] = min(peaks[TR_RL], 1.0)
+        peaks[TR_RU] = min(peaks[TR_RU], 1.0)
+    outs[O_FAM1_TIME] = fam1_time
+    outs[O_DURATION] = duration
+    outs[O_BASE_IMP] = counts[0]
+    outs[O_CRACK_IMP] = counts[1]
+    outs[O_EVENTS] = n_events
+    return status
+
+
+@njit(cache=True)
+def _row_acc(row, MK, MC, MR, MG, r, v, ag):
+    n = r.shape[0]
+    out = 0.0
+    for i in range(n):
+        s = -MR[i] - MG[i] * ag
+        for k in range(n):
+            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
+        out += row[i] * s
+    return out
+
+
+@njit(cache=True)
+def _record(hist, k, L, ist, r, v, val, n):
+    hist[k, 0] = np.dot(L[ROW_T1], r)
+    hist[k, 1] = np.dot(L[ROW_T2], r)
+    hist[k, 2] = val[TR_UB]
+    hist[k, 3] = val[TR_UC]
+    hist[k, 4] = val[TR_UT]
+    hist[k, 5] = val[TR_AB]
+    hist[k, 6] = val[TR_AC]
+    hist[k, 7] = val[TR_AT]
+    hist[k, 8] = ist[I_FAM] * 10 + (1 if ist[I_S] > 0 else 2)
+    for i in range(n):
+        hist[k, 9 + i] = r[i]
+        hist[k, 9 + n + i] = v[i]
+
+
+@njit(cache=True)
+def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, H, m_taylor, D, cf, MK, MC, MR, MG,
+                r, v, a0, beta):
+    """Peak update over a piece of length H from its end values and rates; interior
+    extrema that may beat the running peak are located on the exact series."""
+    for t in range(N_TRACK):
+        vb = abs(val_b[t])
+        if vb > peaks[t]:
+            peaks[t] = vb
+        if der_a[t] * der_b[t] >= 0.0:
+            continue
+        lo, hi, slo, shi = _hermite_ext(val_a[t], val_b[t], der_a[t] * H, der_b[t] * H)
+        est = max(abs(lo) if lo != np.inf else 0.0, abs(hi) if hi != -np.inf else 0.0)
+        if est < peaks[t] * (1.0 - GATE):
+            continue
+        if m_taylor == 0:
+            m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+        mc = _scalar_poly(TR[t], D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
+        guess = slo if abs(lo) >= abs(hi) else shi
+        lo_, hi_ = _solve(cf, mc, 0.0, 1.0, 1, 1e-13, guess)
+        x = abs(_peval(cf, mc, 0.5 * (lo_ + hi_))[0])
+        if x > peaks[t]:
+            peaks[t] = x
+    return m_taylor
+
+
+# ---- the Python entry point -------------------------------------------------------------
+
+_TABLES: OrderedDict = OrderedDict()
+_TABLES_MAX = 128
+
+
+def _tables(wall: Wall, dt: float):
+    """Mode tables of a wall at a record step, filled lazily by the kernel and kept for
+    the next analysis of the same wall (studies run each wall many times)."""
+    key = (wall.params.tobytes(), float(dt))
+    tab = _TABLES.get(key)
+    if tab is None:
+        n = int(n_dof(wall.params))
+        tab = (np.zeros(NMODES, np.bool_), np.zeros(NMODES, np.int64),
+               np.zeros((NMODES, 3, n, n)), np.zeros((NMODES, 2, n)),
+               np.zeros((NMODES, 2 * n, 2 * n)), np.zeros((NMODES, 3, 2 * n)))
+        _TABLES[key] = tab
+        if len(_TABLES) > _TABLES_MAX:
+            _TABLES.popitem(last=False)
+    else:
+        _TABLES.move_to_end(key)
+    return tab
+
+
+def clear_cache() -> None:
+    """Forget the cached mode tables (benchmarks measure cold runs with it)."""
+    _TABLES.clear()
+
+
+def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window=WINDOW):
+    """Validate the arguments shared by every solver; returns (ag, dt, ntail, law)."""
+    if not isinstance(wall, Wall):
+        raise ValueError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
+    try:
+        dt = float(dt)
+    except (TypeError, ValueError):
+        raise ValueError(f"dt={dt!r} must be a number of seconds") from None
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt={dt!r} must be a positive, finite time step in seconds")
+    ag = np.asarray(ground_acceleration, dtype=float)
+    if ag.ndim != 1 or ag.size < 2:
+        raise ValueError(f"ground_acceleration must be a 1-D array of at least 2 samples "
+                         f"(got shape {ag.shape})")
+    bad = ~np.isfinite(ag)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"ground_acceleration has {int(bad.sum())} NaN/inf sample(s), the "
+                         f"first at index {i} (t = {i * dt:g} s)")
+    try:
+        scale = float(scale)
+    except (TypeError, ValueError):
+        raise ValueError(f"scale={scale!r} must be a number") from None
+    if not math.isfinite(scale):
+        raise ValueError(f"scale={scale!r} must be finite")
+    try:
+        cor = float(cor)
+    except (TypeError, ValueError):
+        raise ValueError(f"cor={cor!r} must be a number in (0, 1]") from None
+    if not (0.0 < cor <= 1.0):
+        raise ValueError(f"cor={cor!r} must lie in (0, 1] (coefficient of restitution)")
+    if impact not in LAWS:
+        raise ValueError(f"impact={impact!r} is not an impact law; use one of "
+                         f"{', '.join(map(repr, LAWS))}")
+    try:
+        tail = float(tail)
+    except (TypeError, ValueError):
+        raise ValueError(f"tail={tail!r} must be a duration in seconds") from None
+    if not (math.isfinite(tail) and tail >= 0.0):
+        raise ValueError(f"tail={tail!r} must be a non-negative duration in seconds")
+    window = float(window)
+    if not (math.isfinite(window) and 0.0 < window < dt):
+        raise ValueError(f"window={window!r} must lie in (0, dt)")
+    ntail = int(round(tail / dt))
+    return ag * scale, dt, ntail, LAWS[impact]
+
+
+def _scalars(wall, peaks, outs, status, ntail, dt, N):
+    duration = outs[O_DURATION]
+    res = {
+        "peak_crack_displacement": float(peaks[TR_UC]),
+        "peak_top_displacement": float(peaks[TR_UT]),
+        "peak_base_displacement": float(peaks[TR_UB]),
+        "peak_lower_drift": float(peaks[TR_D1]),
+        "peak_upper_drift": float(peaks[TR_D2]),
+        "peak_top_acceleration": float(peaks[TR_AT]),
+        "peak_crack_acceleration": float(peaks[TR_AC]),
+        "peak_base_acceleration": float(peaks[TR_AB]),
+        "instability_ratio_lower": float(peaks[TR_RL]),
+        "instability_ratio_upper": float(peaks[TR_RU]),
+        "instability_ratio": float(max(peaks[TR_RL], peaks[TR_RU])),
+        "collapsed": int(status == ST_COLLAPSED),
+        "collapse_time": float(outs[O_COLLAPSE_T]),
+        "unfavourable_fraction": float(outs[O_FAM1_TIME] / duration) if duration > 0 else 0.0,
+        "base_impacts": int(outs[O_BASE_IMP]),
+        "crack_impacts": int(outs[O_CRACK_IMP]),
+    }
+    assert tuple(res) == SCALARS or set(res) == set(SCALARS)
+    for name in INTEGER_SCALARS:
+        res[name] = int(res[name])
+    res["status"] = STATUS[status]
+    res["duration"] = float(duration)
+    res["events"] = int(outs[O_EVENTS])
+    return res
+
+
+def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: float = 0.8,
+        impact: str = "scale", tail: float = 0.0, window: float = WINDOW,
+        history: bool = False, max_log: int = 0) -> dict:
+    """One analysis with the exact kernel: the array-level entry point studies call.
+
+    Parameters
+    ----------
+    wall : urmx.Wall
+        The wall and its supports.
+    ground_acceleration : array_like
+        Ground acceleration samples. [m s-2]
+    dt : float
+        Record time step. [s]
+    scale : float
+        Factor applied to the record. [1]
+    cor : float
+        Coefficient of restitution, in (0, 1]. [1]
+    impact : {"scale", "contact"}
+        Impact law (MODEL.md section 8).
+    tail : float
+        Free-vibration tail after the record, rounded to whole steps. [s]
+    window : float
+        Merged-impact window w. [s]
+    history : bool
+        Also return the histories on the record grid under ``"history"``.
+
+    Returns
+    -------
+    dict
+        The scalars of ``urmx.variables.SCALARS`` as floats/ints, ``status`` ("ok",
+        "collapsed" or "event-limit"), ``duration`` (analysed, s) and ``events``.
+    """
+    ag, dt, ntail, law = check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail,
+                                      window)
+    P = wall.params
+    n = int(n_dof(P))
+    N = ag.size
+    ready, nsub, mats, vecs, prop, pvec = _tables(wall, dt)
+    peaks = np.zeros(N_TRACK)
+    outs = np.zeros(N_OUT)
+    nh = N + ntail if history else 1
+    hist = np.full((nh, 9 + 2 * n), np.nan)
+    evlog = np.zeros((max_log, 3))
+    status = _integrate(P, ag, dt, ntail, float(cor), law, float(window), ready, nsub, mats,
+                        vecs, prop, pvec, peaks, outs, hist, bool(history), evlog)
+    res = _scalars(wall, peaks, outs, status, ntail, dt, N)
+    if history:
+        res["history"] = history_dict(hist, dt, n)
+    if max_log:
+        res["event_log"] = evlog[:min(max_log, res["events"])]
+    return res
+
+
+def history_dict(hist: np.ndarray, dt: float, n: int) -> dict:
+    """Histories on the grid (NaN and pattern 0 after a stop)."""
+    pattern = hist[:, 8].copy()
+    pattern[~np.isfinite(pattern)] = 0
+    return {
+        "time": np.arange(hist.shape[0]) * dt,
+        "theta_lower": hist[:, 0], "theta_upper": hist[:, 1],
+        "base_displacement": hist[:, 2], "crack_displacement": hist[:, 3],
+        "top_displacement": hist[:, 4], "base_acceleration": hist[:, 5],
+        "crack_acceleration": hist[:, 6], "top_acceleration": hist[:, 7],
+        "pattern": pattern.astype(np.int8),
+        "r": hist[:, 9:9 + n], "r_dot": hist[:, 9 + n:9 + 2 * n],
+    }

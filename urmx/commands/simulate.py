@@ -97,6 +97,7 @@ def plot_simulation(ds, out):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import numpy as np
 
     t = ds["time"].values
     fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5),
@@ -108,8 +109,9 @@ def plot_simulation(ds, out):
     ax1.set_ylabel("displacement relative to ground [mm]")
     ax1.legend(loc="upper right", fontsize="small")
     ax1.grid(alpha=0.3)
-    ax2.step(t, ds["pattern"].values, where="post", color="k", lw=0.9)
-    ax2.set_yticks([0, 11, 12, 21, 22])
+    levels = np.array([0, 11, 12, 21, 22])  # 0 after a stop
+    ax2.step(t, np.searchsorted(levels, ds["pattern"].values), where="post", color="k", lw=0.9)
+    ax2.set_yticks(range(levels.size), [str(v) for v in levels])
     ax2.set_ylabel(ds["pattern"].attrs["long_name"])
     ax2.set_xlabel(f"{ds['time'].attrs['long_name']} [{ds['time'].attrs['units']}]")
     ax2.grid(alpha=0.3)

@@ -1,0 +1,174 @@
+"""Functional tests of urmx.bench at tiny sizes (structure, rendering, guard logic).
+
+No timing is asserted: the numbers depend on the machine and its load.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from urmx import bench
+from urmx.cli import main
+
+
+def _measured(**kw):
+    m = {"machine_class": "x86_64-2cpu", "seconds": 0.001, "error": 1e-12,
+         "worst": "peak_lower_drift", "events": 590, "reference_events": 590,
+         "samples": 2688, "repeats": 5, "first_call": 0.1}
+    m.update(kw)
+    return m
+
+
+def test_median_time_structure():
+    calls = []
+    t = bench.median_time(lambda: calls.append(1), repeat=4, setup=lambda: None)
+    assert set(t) == {"median", "min", "max", "repeats"}
+    assert t["repeats"] == len(calls) == 4
+    assert t["min"] <= t["median"] <= t["max"]
+
+
+def test_rel_error_handles_zero_and_inf():
+    ref = dict.fromkeys(bench.PEAKS, 2.0)
+    ref["peak_base_displacement"] = 0.0
+    res = dict(ref, peak_top_displacement=2.2)
+    e = bench.rel_error(res, ref)
+    assert e["worst"] == "peak_top_displacement"
+    assert e["max"] == pytest.approx(0.1)
+    assert e["each"]["peak_base_displacement"] == 0.0
+    assert bench.rel_error(dict(ref, peak_lower_drift=math.inf), ref)["max"] == math.inf
+
+
+def test_fit_line_of_a_line():
+    f = bench._fit_line([10, 20, 40], [1.0, 2.0, 4.0])
+    assert f["slope"] == pytest.approx(0.1)
+    assert f["r2"] == pytest.approx(1.0)
+    assert f["loglog_slope"] == pytest.approx(1.0)
+
+
+def test_synthetic_record_and_walls():
+    ag = bench.synthetic_record(5.0, 0.01, pga=3.0)
+    assert ag.size == 501 and np.max(np.abs(ag)) == pytest.approx(3.0, rel=0.02)
+    w = bench.benchmark_wall()
+    assert w.top_stiffness == 815e3 and w.bottom_rigid and w.pmr == 75.0
+    assert bench.slender12_wall().slenderness == pytest.approx(12.0)
+    assert set(bench.bench_walls()) == {"wall12", "west", "c9", "benchmark", "slender12-D3"}
+
+
+def test_synthetic_grid_runs_through_the_study_layer():
+    study, records = bench.synthetic_study(1, 2, duration=0.5)
+    assert study.size == len(study.walls) * 5 * 1 * 2
+    ds, seconds = bench.run_grid(study, records, "serial")
+    assert seconds > 0
+    assert dict(ds.sizes)["scale"] == 2 and "diaphragm" in ds.dims
+    assert int((ds["status"] == 3).sum()) == 0  # every cell ran
+
+
+def test_guard_verdict_logic():
+    base = {"seconds": 0.001}
+    ok, msgs = bench.guard_verdict(_measured(seconds=0.0029), base)
+    assert ok and any("2.90x" in m for m in msgs)
+    ok, msgs = bench.guard_verdict(_measured(seconds=0.0031), base)
+    assert not ok and any(m.startswith("FAIL") and "slower" in m for m in msgs)
+    ok, msgs = bench.guard_verdict(_measured(error=2e-9), base)
+    assert not ok and msgs[0].startswith("FAIL")
+    ok, msgs = bench.guard_verdict(_measured(seconds=1.0), None)  # unknown class: pass
+    assert ok and any("not judged" in m for m in msgs)
+
+
+def test_baseline_round_trip_keeps_other_classes(tmp_path):
+    path = tmp_path / "baseline.toml"
+    bench.write_baseline(path, "arm64-8cpu", {"seconds": 0.0002, "cpu": 'M1 "Pro"'})
+    bench.write_baseline(path, "x86_64-2cpu", {"seconds": 0.0005, "events": 590})
+    data = bench._read_baseline(path)
+    assert data["arm64-8cpu"] == {"seconds": 0.0002, "cpu": 'M1 "Pro"'}
+    assert data["x86_64-2cpu"]["events"] == 590
+
+
+def test_guard_with_a_fake_measurement(tmp_path, monkeypatch):
+    path = tmp_path / "baseline.toml"
+    monkeypatch.setattr(bench, "guard_measure", lambda quick=False: _measured())
+    lines: list[str] = []
+    m = bench.guard(baseline_path=path, echo=lines.append)
+    assert m["passed"] and m["baseline"] is None and "PASS" in lines[-1]
+    m = bench.guard(update=True, baseline_path=path, echo=lines.append)
+    assert m["baseline"]["seconds"] == 0.001 and path.is_file()
+    monkeypatch.setattr(bench, "guard_measure", lambda quick=False: _measured(seconds=0.01))
+    assert main(["bench", "guard", "--baseline", str(path)]) == 1
+    monkeypatch.setattr(bench, "guard_measure", lambda quick=False: _measured(seconds=0.002))
+    assert main(["bench", "guard", "--baseline", str(path)]) == 0
+
+
+def _fake_sections():
+    info = bench.machine_info()
+    peaks = {"max": 1e-12, "worst": "peak_lower_drift", "each": dict.fromkeys(bench.PEAKS, 1e-12)}
+    kern = {"case": "benchmark", "samples": 2688, "dt": 0.02, "scale": 0.5, "events": 590,
+            "status": "ok", "reference_events": 590,
+            "warm": {"median": 4e-4, "repeats": 9}, "cold": {"median": 6e-4, "repeats": 9},
+            "reference_1e-8": {"median": 2.0, "repeats": 3}, "rate_warm": 2500.0,
+            "rate_cold": 1666.0, "us_per_event": 0.7, "speedup": 5000.0,
+            "converged_rtol": 1e-12, "converged_seconds": 3.0, "converged_events": 590,
+            "error_kernel": peaks, "error_reference_1e-8": dict(peaks, max=1e-9),
+            "met_rate": True, "met_speedup": True, "met_error": True,
+            "profile": {"analyses": 10, "total_us": 400.0,
+                        "top": [{"function": "kernel.py:_integrate", "calls": 1,
+                                 "own_us": 380.0, "cumulative_us": 380.0}]}}
+    case = {"wall": "wall12", "record": "elcentro", "scale": 0.5, "samples": 101, "dt": 0.02,
+            "duration": 2.0, "events": 12, "status": "ok", "converged_rtol": 1e-12,
+            "converged_events": 12, "converged_status": "ok", "kernel_seconds": 1e-4,
+            "kernel_error": 0.0, "kernel_worst": "peak_lower_drift",
+            "reference": [{"rtol": 1e-3, "seconds": 0.1, "error": 1e-4, "events": 12},
+                          {"rtol": 1e-6, "seconds": 0.2, "error": math.nan, "failed": "x"}]}
+    wp = {"window": 2.0, "rtols": [1e-3, 1e-6], "cases": [case], "figures": []}
+    grid = {"record": "synthetic", "grid": "tiny", "analyses": 10, "batch_size": 16,
+            "collapsed_share": 0.1,
+            "runs": [{"scheduler": "serial", "workers": 1, "seconds": 1.0, "rate": 10.0},
+                     {"scheduler": "LocalCluster 1", "workers": 1, "seconds": 1.0,
+                      "rate": 10.0, "startup": 2.0},
+                     {"scheduler": "LocalCluster 2", "workers": 2, "seconds": 0.55,
+                      "rate": 18.0, "startup": 2.0}],
+            "scaling": 1.8, "met_scaling": True,
+            "big": {"analyses": 100, "seconds": 1.0, "rate": 100.0, "grid": "tiny"},
+            "met_big": False}
+    hard = {"reference_rtol": 1e-10, "rows": [
+        {"case": "zero input", "kernel_ms": 0.1, "events": 0, "status": "ok",
+         "check": "max peak", "value": 0.0, "ok": True, "reference_s": 0.5,
+         "reference_events": 0, "agreement": 0.0}]}
+    guard = dict(_measured(), passed=True, messages=["ok: fine"], baseline=None,
+                 guard_seconds=12.0)
+    data = {"kernel": kern, "work_precision": wp, "grid_scaling": grid, "hard_cases": hard,
+            "guard": guard}
+    return {k: {"machine": info, "quick": k == "grid_scaling", "data": v}
+            for k, v in data.items()}
+
+
+def test_render_markdown_from_fake_sections(tmp_path):
+    text = bench.render(_fake_sections())
+    assert text.startswith("# Performance")
+    for needle in ("## Machine", "## Targets", "## Kernel", "## Work-precision",
+                   "## Grid scaling", "## Hard cases", "## Regression guard", "QUICK",
+                   "2500 /s warm", "**NOT MET**", "5000x"):
+        assert needle in text, needle
+    assert bench.render({}).endswith("No measurements yet.\n")
+    # sections saved as JSON render into the report file
+    folder = tmp_path / "performance"
+    for name, s in _fake_sections().items():
+        bench.save_section(folder, name, s["data"], s["machine"], s["quick"])
+    out = bench.write_report(tmp_path / "performance.md")
+    assert "## Regression guard" in out.read_text()
+
+
+def test_work_precision_figure(tmp_path):
+    case = _fake_sections()["work_precision"]["data"]["cases"][0]
+    names = bench._plot_work_precision([case], tmp_path)
+    assert (tmp_path / names[0]).stat().st_size > 0
+
+
+def test_machine_info_keys():
+    info = bench.machine_info()
+    for key in ("cpu", "cores", "ram_gb", "python", "numpy", "numba", "scipy", "dask",
+                "urmx", "commit", "date", "machine_class"):
+        assert key in info
+    assert info["machine_class"] == bench.machine_class()

@@ -79,10 +79,20 @@ STATUS = ("ok", "collapsed", "event-limit")
 LAWS = {"scale": 0, "contact": 1}
 # scalar outputs of _integrate (index order)
 O_COLLAPSE_T, O_FAM1_TIME, O_DURATION, O_BASE_IMP, O_CRACK_IMP, O_EVENTS = range(6)
-N_OUT = 6
+O_SUBSTEPS, O_SERIES = 6, 7
+N_OUT = 8
 
 
 # ---- shared event semantics -----------------------------------------------------------
+
+@njit(cache=True, inline='always')
+def _dot(a, b):
+    """Small dot product without BLAS (numba's np.dot calls BLAS, costly at n <= 3)."""
+    out = 0.0
+    for i in range(a.shape[0]):
+        out += a[i] * b[i]
+    return out
+
 
 @njit(cache=True)
 def watch_rows(P):
@@ -192,11 +202,11 @@ def set_family(P, ist, r, v, L):
     """Family from the pivot sides; a family change reclassifies the lower branch.
     Returns True when |theta1| is at or beyond the new case's theta0 (immediate collapse)."""
     fam = 1 if ist[I_S] == ist[I_C] else 2
-    th1 = np.dot(L[ROW_T1], r)
+    th1 = _dot(L[ROW_T1], r)
     if fam != ist[I_FAM]:
         ist[I_FAM] = fam
         case = lower_case(fam)
-        ist[I_BL] = classify(P, case, th1, np.dot(L[ROW_T1], v))
+        ist[I_BL] = classify(P, case, th1, _dot(L[ROW_T1], v))
         if abs(th1) >= curve(P, case)[1]:
             return True
     return False
@@ -274,8 +284,8 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
         if other_open:
             row = L[ROW_GC] if base else L[ROW_T1]
             side = ist[I_C] if base else ist[I_S]
-            eo = side * np.dot(row, r)
-            edo = side * np.dot(row, v)
+            eo = side * _dot(row, r)
+            edo = side * _dot(row, v)
             eddo = side * _row_acc(row, MK, MC, MR, MG, r, v, ag_now)
             if edo < 0.0 and eo + edo * window + 0.5 * eddo * window * window <= 0.0:
                 base = True
@@ -293,9 +303,9 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
     else:
         impact_velocity(P, L, v, base, crack, cor, law, Minv)
     # a joint left slower than v_rest is closed again, under the opening rule
-    if base and abs(np.dot(L[ROW_T1], v)) < v_rest:
+    if base and abs(_dot(L[ROW_T1], v)) < v_rest:
         ist[I_BOPEN] = 0
-    if crack and abs(np.dot(L[ROW_GC], v)) < v_rest:
+    if crack and abs(_dot(L[ROW_GC], v)) < v_rest:
         ist[I_COPEN] = 0
     return 1 if set_family(P, ist, r, v, L) else 0
 
@@ -350,7 +360,7 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _sum_state(D, m, s, h, r, v):
     """r(s h) and r_d(s h) from the Taylor coefficients."""
     n = r.shape[0]
@@ -364,7 +374,7 @@ def _sum_state(D, m, s, h, r, v):
         v[i] = dp / h
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _scalar_poly(row, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of sig*row.r + kap (displacement kind) or of
     row.r_dd + xg_dd (acceleration kind). Returns their number."""
@@ -387,7 +397,7 @@ def _scalar_poly(row, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     return m - 2
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
@@ -429,6 +439,15 @@ def _solve(cf, m, lo, hi, deriv, tol, guess):
             xn = min(max(xn, a), b)
         x = xn
     return a, b
+
+
+@njit(cache=True, inline='always')
+def _lower_bound(cf, m):
+    """A rigorous lower bound of the polynomial on [0, 1]: c0 - sum_j>=1 |c_j|."""
+    out = cf[0]
+    for j in range(1, m):
+        out -= abs(cf[j])
+    return out
 
 
 @njit(cache=True)
@@ -485,26 +504,21 @@ def _hermite_ext(p0, p1, m0, m1):
     B = -6.0 * p0 - 4.0 * m0 + 6.0 * p1 - 2.0 * m1
     C = m0
     lo, hi, slo, shi = np.inf, -np.inf, 0.5, 0.5
-    roots = np.empty(2)
-    nr = 0
+    r0 = -1.0
+    r1 = -1.0
     if abs(A) < 1e-300:
         if B != 0.0:
-            roots[0] = -C / B
-            nr = 1
+            r0 = -C / B
     else:
         disc = B * B - 4.0 * A * C
         if disc >= 0.0:
             sq = math.sqrt(disc)
             qq = -0.5 * (B + (sq if B >= 0 else -sq))
             if qq != 0.0:
-                roots[0] = qq / A
-                roots[1] = C / qq
-                nr = 2
-            else:
-                roots[0] = 0.0
-                nr = 1
-    for i in range(nr):
-        s = roots[i]
+                r0 = qq / A
+                r1 = C / qq
+    for i in range(2):
+        s = r0 if i == 0 else r1
         if 0.0 < s < 1.0:
             s2 = s * s
             s3 = s2 * s
@@ -567,12 +581,11 @@ def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D)
 
 # ---- the integrator ---------------------------------------------------------------------
 
-@njit(cache=True)
-def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der):
-    """Tracker values and rates at one instant (accelerations absolute)."""
+@njit(cache=True, inline='always')
+def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
+    """Tracker values and rates at one instant (accelerations absolute); acc and jerk
+    are scratch arrays."""
     n = r.shape[0]
-    acc = np.empty(n)
-    jerk = np.empty(n)
     for i in range(n):
         s = -MR[i] - MG[i] * ag
         for k in range(n):
@@ -600,7 +613,7 @@ def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der):
         der[t] = b
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _events_at(rows, sig, kap, ne, r, v, e, ed):
     n = r.shape[0]
     for k in range(ne):
@@ -646,6 +659,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     rb = np.zeros(n)
     vb = np.zeros(n)
     xa = np.zeros(2 * n)
+    sacc = np.zeros(n)
+    sjerk = np.zeros(n)
     g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
     v_rest = g_open / dt
     # start: at rest, family 2, provisional sides against the first ground motion
@@ -669,6 +684,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     status = ST_OK
     fam1_time = 0.0
     n_events = 0
+    n_sub = 0
+    n_series = 0
     counts = np.zeros(2, np.int64)  # base, crack impacts
     t_end = nsteps * dt
     tracker_rows(P, L, ist[I_FAM], TR)
@@ -677,16 +694,22 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
         _build_mode(P, ist[I_FAM], ist[I_BL], ist[I_BU], dt, mid, ready, nsub, mats, vecs,
                     prop, pvec, D)
     ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
+    _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
+    MK = mats[mid, 0]
+    MC = mats[mid, 1]
+    MR = vecs[mid, 0]
+    MG = vecs[mid, 1]
+    E = prop[mid]
     a_now = ag[0] if N > 0 else 0.0
     beta0 = (ag[1] - ag[0]) / dt if N > 1 else 0.0
-    _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, a_now, beta0,
-           val_a, der_a)
+    _point(MK, MC, MR, MG, TR, r, v, a_now, beta0, val_a, der_a, sacc, sjerk)
     for t in range(N_TRACK):
         peaks[t] = max(peaks[t], abs(val_a[t]))
     if want_hist:
         _record(hist, 0, L, ist, r, v, val_a, n)
     duration = t_end
     done = False
+    beta_prev = beta0
     for step in range(nsteps):
         if step < N - 1:
             alpha = ag[step]
@@ -697,10 +720,13 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
         t0 = step * dt
         tau = 0.0
         ev_here = 0
-        # values and rates at the step start, in this step's forcing
-        _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, alpha, beta,
-               val_a, der_a)
-        _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
+        # the rates of the absolute accelerations jump with the slope of the record:
+        # d(rate)/d(beta) = 1 - row . M^-1 G (values and other rates are continuous)
+        if step > 0:
+            dbeta = beta - beta_prev
+            for t in range(N_DISP, N_TRACK):
+                der_a[t] += dbeta * (1.0 - _dot(TR[t], MG))
+        beta_prev = beta
         while True:
             ns = nsub[mid]
             h_sub = dt / ns
@@ -710,15 +736,11 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
             H = tb - tau
             if H <= 1e-15 * dt:
                 break
+            n_sub += 1
             a0 = alpha + beta * tau
-            MK = mats[mid, 0]
-            MC = mats[mid, 1]
-            MR = vecs[mid, 0]
-            MG = vecs[mid, 1]
             full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
             m_taylor = 0
             if full:
-                E = prop[mid]
                 for i in range(n):
                     xa[i] = r[i]
                     xa[n + i] = v[i]
@@ -765,6 +787,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                     if s_lo < 0.0 or s_lo >= s_ev:
                         continue
                 if dip:
+                    if opening and _lower_bound(cf, mc) > 0.0:
+                        continue  # e(s) >= c0 - sum|c_j| > 0 on [0, 1]: no crossing
                     # the exact first point where e <= 0 on the sub-step, if any
                     s_hi = _first_nonpositive(cf, mc, ed_a[k] < 0.0 and not opening)
                     if s_hi > 1.0:
@@ -782,9 +806,12 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                     k_ev = k
             if k_ev < 0:
                 # no event: peaks over the sub-step, then advance
-                _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b)
-                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, H, m_taylor, D, cf,
-                                       MK, MC, MR, MG, r, v, a0, beta)
+                _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b, sacc,
+                       sjerk)
+                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, 1.0, m_taylor, D,
+                                       cf, MK, MC, MR, MG, r, v, a0, beta, H)
+                if m_taylor:
+                    n_series += 1
                 if ist[I_FAM] == 1:
                     fam1_time += H
                 tau = tb
@@ -801,17 +828,18 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                     break
                 continue
             # ---- an event at tau + s_ev*H ----
+            n_series += 1
             if m_taylor == 0:
                 m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
             He = s_ev * H
             _sum_state(D, m_taylor, s_ev, H, rb, vb)
             te_loc = tau + He
-            _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b)
+            _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b, sacc,
+                   sjerk)
             if He > 0.0:
-                # peaks on [tau, te] (the one-sided values before the event included);
-                # the series about tau is re-expanded over the shorter interval
-                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, He, 0, D, cf,
-                                       MK, MC, MR, MG, r, v, a0, beta)
+                # peaks on [tau, te], the one-sided values before the event included
+                _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_ev, m_taylor, D, cf, MK,
+                            MC, MR, MG, r, v, a0, beta, H)
             if ist[I_FAM] == 1:
                 fam1_time += He
             tau = te_loc
@@ -851,7 +879,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                 MC = mats[mid, 1]
                 MR = vecs[mid, 0]
                 MG = vecs[mid, 1]
-                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a)
+                E = prop[mid]
+                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc, sjerk)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
                 _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
@@ -871,15 +900,13 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
             break
         if step == N - 2:
             # the record ends: the right-hand limit of the absolute accelerations (xg_dd = 0)
-            _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, 0.0, 0.0,
-                   val_b, der_b)
+            _point(MK, MC, MR, MG, TR, r, v, 0.0, 0.0, val_b, der_b, sacc, sjerk)
             for t in range(N_DISP, N_TRACK):
                 peaks[t] = max(peaks[t], abs(val_b[t]))
         if want_hist:
             a_grid = ag[step + 1] if step + 1 < N else 0.0
             b_grid = 0.0
-            _point(mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], TR, r, v, a_grid,
-                   b_grid, val_b, der_b)
+            _point(MK, MC, MR, MG, TR, r, v, a_grid, b_grid, val_b, der_b, sacc, sjerk)
             _record(hist, step + 1, L, ist, r, v, val_b, n)
     if status == ST_COLLAPSED:
         peaks[TR_RL] = min(peaks[TR_RL], 1.0)
@@ -889,10 +916,12 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     outs[O_BASE_IMP] = counts[0]
     outs[O_CRACK_IMP] = counts[1]
     outs[O_EVENTS] = n_events
+    outs[O_SUBSTEPS] = n_sub
+    outs[O_SERIES] = n_series
     return status
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _row_acc(row, MK, MC, MR, MG, r, v, ag):
     n = r.shape[0]
     out = 0.0
@@ -906,8 +935,8 @@ def _row_acc(row, MK, MC, MR, MG, r, v, ag):
 
 @njit(cache=True)
 def _record(hist, k, L, ist, r, v, val, n):
-    hist[k, 0] = np.dot(L[ROW_T1], r)
-    hist[k, 1] = np.dot(L[ROW_T2], r)
+    hist[k, 0] = _dot(L[ROW_T1], r)
+    hist[k, 1] = _dot(L[ROW_T2], r)
     hist[k, 2] = val[TR_UB]
     hist[k, 3] = val[TR_UC]
     hist[k, 4] = val[TR_UT]
@@ -920,26 +949,28 @@ def _record(hist, k, L, ist, r, v, val, n):
         hist[k, 9 + n + i] = v[i]
 
 
-@njit(cache=True)
-def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, H, m_taylor, D, cf, MK, MC, MR, MG,
-                r, v, a0, beta):
-    """Peak update over a piece of length H from its end values and rates; interior
-    extrema that may beat the running peak are located on the exact series."""
+@njit(cache=True, inline='always')
+def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
+                MG, r, v, a0, beta, H):
+    """Peak update over [0, s_end*H] of a sub-step of length H from the end values and
+    rates; interior extrema that may beat the running peak are located on the exact
+    series about the sub-step start (computed here if m_taylor is 0)."""
+    Hs = s_end * H
     for t in range(N_TRACK):
         vb = abs(val_b[t])
         if vb > peaks[t]:
             peaks[t] = vb
         if der_a[t] * der_b[t] >= 0.0:
             continue
-        lo, hi, slo, shi = _hermite_ext(val_a[t], val_b[t], der_a[t] * H, der_b[t] * H)
+        lo, hi, slo, shi = _hermite_ext(val_a[t], val_b[t], der_a[t] * Hs, der_b[t] * Hs)
         est = max(abs(lo) if lo != np.inf else 0.0, abs(hi) if hi != -np.inf else 0.0)
         if est < peaks[t] * (1.0 - GATE):
             continue
         if m_taylor == 0:
             m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
         mc = _scalar_poly(TR[t], D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
-        guess = slo if abs(lo) >= abs(hi) else shi
-        lo_, hi_ = _solve(cf, mc, 0.0, 1.0, 1, 1e-13, guess)
+        guess = s_end * (slo if abs(lo) >= abs(hi) else shi)
+        lo_, hi_ = _solve(cf, mc, 0.0, s_end, 1, 1e-13, guess)
         x = abs(_peval(cf, mc, 0.5 * (lo_ + hi_))[0])
         if x > peaks[t]:
             peaks[t] = x
@@ -1048,6 +1079,8 @@ def _scalars(wall, peaks, outs, status, ntail, dt, N):
     res["status"] = STATUS[status]
     res["duration"] = float(duration)
     res["events"] = int(outs[O_EVENTS])
+    res["substeps"] = int(outs[O_SUBSTEPS])
+    res["series"] = int(outs[O_SERIES])
     return res
 
 

@@ -165,10 +165,8 @@ def test_wall_kappa_beyond_theta_b():
         Wall(**GOOD, pmr=100.0, kappa=0.2)  # theta_b/theta0 = 0.1
 
 
-@pytest.mark.xfail(strict=True, reason="urmx.model compares kappa >= 1 - 0.009*pmr in "
-                   "floating point: at the decimal boundary the limit rounds up by 1 ulp "
-                   "(0.3250000000000001, 0.10000000000000009) and a zero-length plateau is "
-                   "accepted; needs a relative tolerance in Wall.__post_init__")
+# kappa exactly at theta_b: 1 - 0.009*pmr rounds up by 1 ulp in binary, so the check
+# needs its relative margin (a zero-length plateau must be refused)
 @pytest.mark.parametrize("pmr, kappa", [(75.0, 0.325), (100.0, 0.1)])
 def test_wall_kappa_exactly_at_theta_b(pmr, kappa):
     with pytest.raises(ValueError, match=rf"kappa={kappa!r}"):

@@ -18,7 +18,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a bare source tr
 __all__ = ["Wall", "simulate", "run_study", "open_study", "UrmxWarning", "__version__"]
 
 _LAZY = {
-    "simulate": ("urmx.simulate", "simulate"),
+    "simulate": ("urmx.simulation", "simulate"),
     "run_study": ("urmx.study", "run_study"),
     "open_study": ("urmx.study", "open_study"),
 }

@@ -71,7 +71,7 @@ def _table(ds) -> str:
 
 
 def _run(args) -> int:
-    from urmx.simulate import read_wall, simulate, write_netcdf
+    from urmx.simulation import read_wall, simulate, write_netcdf
 
     wall = read_wall(args.wall)
     trace = _trace(args.record, args.dt, args.unit, args.records)

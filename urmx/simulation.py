@@ -8,11 +8,6 @@ of ``urmx.variables.SCALARS`` as 0-d variables, the histories (on request) over 
 
 Studies call :func:`urmx.kernel.run` directly and label per batch: building a Dataset
 costs about 0.2 ms, a large share of one analysis.
-
-Note on the name: this module and the function share the name ``simulate``. Importing
-the module binds it as ``urmx.simulate`` in the package namespace, which would hide the
-function that ``urmx/__init__.py`` exports lazily; the module is therefore made callable
-(``urmx.simulate(...)`` calls :func:`simulate` whichever of the two the name is bound to).
 """
 
 from __future__ import annotations
@@ -21,7 +16,6 @@ import dataclasses
 import math
 import os
 import sys
-import types
 from pathlib import Path
 from typing import Any
 
@@ -214,12 +208,3 @@ def read_wall(path: str | os.PathLike) -> Wall:
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
 
-
-class _CallableModule(types.ModuleType):
-    """``urmx.simulate`` stays callable after this module is imported (see above)."""
-
-    def __call__(self, *args: Any, **kwargs: Any) -> xr.Dataset:
-        return simulate(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -17,7 +17,10 @@ def register(sub) -> None:
     p.set_defaults(handler=_run)
 
     p = sub.add_parser("paper", help="run the paper's studies and write the reports")
-    p.add_argument("--out", default="results", help="output folder (default: results)")
+    p.add_argument("--out", default="results",
+                   help="folder of the netCDF archives (default: results)")
+    p.add_argument("--report", default="reports/paper",
+                   help="folder of the figures and REPORT.md (default: reports/paper)")
     _common(p)
     p.set_defaults(handler=_paper)
 
@@ -82,8 +85,9 @@ def _paper(args) -> int:
         print("urmx paper: urmx.report.write_report is not available yet; the archives are in "
               f"{out}/ (run the report step when it lands)", file=sys.stderr)
         return 0
-    write_report(archives, out)
-    print(f"urmx paper: done in {time.perf_counter() - start:.1f} s -> {out}", file=sys.stderr)
+    report = write_report(archives, args.report)
+    print(f"urmx paper: done in {time.perf_counter() - start:.1f} s: archives in {out}/, "
+          f"report {report}", file=sys.stderr)
     return 0
 
 

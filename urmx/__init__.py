@@ -24,10 +24,16 @@ _LAZY = {
 }
 
 
-def __getattr__(name):
-    if name in _LAZY:
-        import importlib
+_SUBMODULES = ("analysis", "catalog", "kernel", "model", "plot", "records", "reference",
+               "report", "simulation", "study", "variables")
 
+
+def __getattr__(name):
+    import importlib
+
+    if name in _LAZY:
         module, attr = _LAZY[name]
         return getattr(importlib.import_module(module), attr)
+    if name in _SUBMODULES:
+        return importlib.import_module(f"urmx.{name}")
     raise AttributeError(f"module 'urmx' has no attribute {name!r}")

@@ -306,7 +306,7 @@ def test_linear_branch_matches_closed_form_oscillator():
 AGREEMENT = {
     # wall, record, scale, seconds (None: the full record)
     "wall12-nahanni": (WALL12_RIGID, nahanni, 0.5, None),
-    "west-bigbear": (WEST, bigbear, 5.0, 20.0),
+    "west-bigbear": (WEST, bigbear, 5.0, None),
     # C9 x 1.5 meets a knife-edge at 51.64 s (a crack re-closure decided by the v_rest
     # rule at 1e-6 rad: the reference itself flips with rtol), so its first 40 s
     "c9-elcentro": (C9, elcentro, 1.5, 40.0),
@@ -330,6 +330,23 @@ def test_exact_agrees_with_reference_on_table2_walls(case):
                                                        abs=1e-9)
     assert (a["base_impacts"], a["crack_impacts"], a["events"]) == \
         (b["base_impacts"], b["crack_impacts"], b["events"])
+
+
+def test_reference_finds_a_grazing_crack_impact():
+    """C9 with a rigid base, El Centro x 0.6: the crack joint closes again 14 ms after an
+    impact at 1.5438 s (a shallow dip of theta2 - theta1 through zero). The exact kernel
+    finds it at 1.5577541691 s, as do the reference at rtol 1e-13, Radau and RK45; DOP853
+    at rtol 1e-10 steps over it (solve_ivp looks for sign changes only at step ends)."""
+    wall = SUPPORTS["rigid/flex"]
+    ag, dt = elcentro()
+    ag = ag[:86]  # 1.7 s
+    a = kernel.run(wall, ag, dt, scale=0.6, max_log=100)
+    b = reference.run(wall, ag, dt, scale=0.6)
+    t_a = a["event_log"][a["event_log"][:, 1] == EV_CRACK_IMPACT, 0]
+    assert np.any(np.abs(t_a - 1.5577541691) < 1e-9)
+    assert a["crack_impacts"] == b["crack_impacts"]
+    worst, name = worst_peak_difference(a, b)
+    assert worst < 1e-6, (name, worst)
 
 
 def test_exact_agrees_with_reference_on_collapse_time():

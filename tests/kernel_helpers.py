@@ -8,7 +8,7 @@ them skip when the folder is missing.
 from __future__ import annotations
 
 import os
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -53,21 +53,21 @@ def _need(path: Path) -> Path:
     return path
 
 
-@lru_cache(maxsize=None)
+@cache
 def elcentro() -> tuple[np.ndarray, float]:
     """El Centro 1940 S00E, m/s2 (file: cm/s2, 6 values a line), dt 0.02 s."""
     path = _need(RECORDS / "elcentro1940" / "elcentro_S00E_1940.dat")
     return np.loadtxt(path).ravel() / 100.0, 0.02
 
 
-@lru_cache(maxsize=None)
+@cache
 def nahanni() -> tuple[np.ndarray, float]:
     """Nahanni 1985 Site 1, 010 deg, m/s2 (file: g, one column), dt 0.005 s."""
     path = _need(RECORDS / "nahanni1985" / "NS1-010")
     return np.loadtxt(path) * G, 0.005
 
 
-@lru_cache(maxsize=None)
+@cache
 def bigbear() -> tuple[np.ndarray, float]:
     """Big Bear 1992, Hesperia (CDMG), the manifest's channel, m/s2."""
     _need(RECORDS / "bigbear1992" / "ce23583r_HESPERIA.RAW")

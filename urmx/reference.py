@@ -28,7 +28,8 @@ def _mode(P, ist, cache):
 
 
 def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
-        window=K.WINDOW, rtol=1e-10, atol=None, method="DOP853", history=False) -> dict:
+        window=K.WINDOW, rtol=1e-10, atol=None, method="DOP853", max_step=None,
+        history=False) -> dict:
     """One analysis with scipy's ``solve_ivp`` (same outputs as :func:`urmx.kernel.run`).
 
     Parameters
@@ -39,6 +40,10 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         Absolute tolerance; default ``rtol * 1e-3 * theta_a`` of Case 2 on rotations.
     method : {"DOP853", "Radau", "RK45", "LSODA"}
         The ``solve_ivp`` method.
+    max_step : float, optional
+        Largest solver step; default ``dt/8``. solve_ivp finds an event only where its
+        function changes sign between step ends, so a shallow closure (a grazing impact)
+        inside one long step would be missed. [s]
     """
     ag, dt, ntail, law = K.check_inputs(wall, ground_acceleration, dt, scale, cor, impact,
                                         tail, window)
@@ -53,6 +58,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     v_rest = g_open / dt
     if atol is None:
         atol = rtol * 1e-3 * wall.segment(2).theta_a
+    max_step = dt / 8.0 if max_step is None else float(max_step)
     cache: dict = {}
     TR = np.zeros((K.N_TRACK, n))
     rows = np.zeros((K.MAX_EV, n))
@@ -133,7 +139,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 evfuns.append(ex)
             x0 = np.concatenate([r, v])
             sol = solve_ivp(rhs, (tau, dt), x0, method=method, rtol=rtol, atol=atol,
-                            events=evfuns)
+                            events=evfuns, max_step=max_step)
             # interior extrema (non-terminal events) up to the end of this piece
             t_stop = sol.t[-1]
             for k in range(ne):
@@ -158,7 +164,8 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
             te = float(sol.t_events[k_ev][0])
             # step to the event (an interpolated state is less accurate)
             if te > tau:
-                s2 = solve_ivp(rhs, (tau, te), x0, method=method, rtol=rtol, atol=atol)
+                s2 = solve_ivp(rhs, (tau, te), x0, method=method, rtol=rtol, atol=atol,
+                               max_step=max_step)
                 r, v = s2.y[:n, -1].copy(), s2.y[n:, -1].copy()
             if ist[K.I_FAM] == 1:
                 fam1 += te - tau

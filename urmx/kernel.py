@@ -546,7 +546,17 @@ def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D)
     mats[idx, 2] = Minv
     vecs[idx, 0] = MR
     vecs[idx, 1] = MinvG
-    nu = math.sqrt(_norm_inf(MK)) + _norm_inf(MC)
+    # nu: the spectral radius of the first-order matrix [[0, I], [-M^-1 K, -M^-1 C]]
+    # (the norm bound sqrt|M^-1 K| + |M^-1 C| is about twice as large for stiff springs)
+    A = np.zeros((2 * n, 2 * n), np.complex128)
+    for i in range(n):
+        A[i, n + i] = 1.0
+        for j in range(n):
+            A[n + i, j] = -MK[i, j]
+            A[n + i, n + j] = -MC[i, j]
+    nu = np.max(np.abs(np.linalg.eigvals(A)))
+    if not np.isfinite(nu):
+        nu = math.sqrt(_norm_inf(MK)) + _norm_inf(MC)
     ns = max(1, int(math.ceil(nu * dt / RHO)))
     nsub[idx] = ns
     h = dt / ns

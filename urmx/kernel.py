@@ -47,8 +47,19 @@ from collections import OrderedDict
 import numpy as np
 from numba import njit
 
-from .model import (P_A1, P_A2, P_CASE, P_RIGID_B, P_RIGID_T, Wall, classify, curve,
-                    lower_case, n_dof, system, transform)
+from .model import (
+    P_A1,
+    P_A2,
+    P_RIGID_B,
+    P_RIGID_T,
+    Wall,
+    classify,
+    curve,
+    lower_case,
+    n_dof,
+    system,
+    transform,
+)
 from .variables import INTEGER_SCALARS, SCALARS
 
 KMAX = 48  # most Taylor terms a sub-step may need
@@ -480,7 +491,7 @@ def _first_nonpositive(cf, m, single_min):
         s = 0.5 * (a + b)
         return s if _peval(cf, m, s)[0] <= 0.0 else 2.0
     ns = 16
-    p_prev, d_prev, _ = _peval(cf, m, 0.0)
+    d_prev = _peval(cf, m, 0.0)[1]
     s_prev = 0.0
     for i in range(1, ns + 1):
         s = i / ns
@@ -492,7 +503,7 @@ def _first_nonpositive(cf, m, single_min):
             sm = 0.5 * (a + b)
             if _peval(cf, m, sm)[0] <= 0.0:
                 return sm
-        p_prev, d_prev, s_prev = p, d, s
+        d_prev, s_prev = d, s
     return 2.0
 
 
@@ -890,7 +901,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                 MR = vecs[mid, 0]
                 MG = vecs[mid, 1]
                 E = prop[mid]
-                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc, sjerk)
+                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc,
+                       sjerk)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
                 _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)

@@ -27,6 +27,40 @@ def _mode(P, ist, cache):
     return cache[key]
 
 
+def _rhs(MK, MC, MR, MG, alpha, beta, n):
+    """First-order right-hand side of one piece, the ground linear in the step's time."""
+    def rhs(t, x):
+        rr, vv = x[:n], x[n:]
+        return np.concatenate([vv, -MK @ rr - MC @ vv - MR - MG * (alpha + beta * t)])
+    return rhs
+
+
+def _event(row, sig, kap, n):
+    """Terminal event e = sig*(row . r) + kap falling through zero (urmx.kernel's form)."""
+    def ev(t, x):
+        return sig * (row @ x[:n]) + kap
+    ev.terminal = True
+    ev.direction = -1
+    return ev
+
+
+def _extremum(row, tracker, mode, alpha, beta, n):
+    """Non-terminal event at an interior extremum of a peak output (its rate is zero)."""
+    MK, MC, MR, MG, _ = mode
+    if tracker < K.N_DISP:
+        def ex(t, x):
+            return row @ x[n:]
+    else:
+        def ex(t, x):
+            rr, vv = x[:n], x[n:]
+            acc = -MK @ rr - MC @ vv - MR - MG * (alpha + beta * t)
+            return row @ (-MK @ vv - MC @ acc - MG * beta) + beta
+    ex.terminal = False
+    ex.direction = 0
+    ex.tracker = tracker
+    return ex
+
+
 def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
         window=K.WINDOW, rtol=1e-10, atol=None, method="DOP853", max_step=None,
         history=False) -> dict:
@@ -111,32 +145,11 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
             MK, MC, MR, MG, Minv = mode
             ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
 
-            def rhs(t, x, MK=MK, MC=MC, MR=MR, MG=MG):
-                rr, vv = x[:n], x[n:]
-                return np.concatenate([vv, -MK @ rr - MC @ vv - MR - MG * (alpha + beta * t)])
-
-            evfuns = []
-            for k in range(ne):
-                def ev(t, x, row=rows[k].copy(), s=sig[k], c=kap[k]):
-                    return s * (row @ x[:n]) + c
-                ev.terminal = True
-                ev.direction = -1
-                evfuns.append(ev)
+            rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
+            evfuns = [_event(rows[k].copy(), sig[k], kap[k], n) for k in range(ne)]
             for t_ in range(K.N_TRACK):
-                if not TR[t_].any():
-                    continue
-                if t_ < K.N_DISP:
-                    def ex(t, x, row=TR[t_].copy()):
-                        return row @ x[n:]
-                else:
-                    def ex(t, x, row=TR[t_].copy(), MK=MK, MC=MC, MR=MR, MG=MG):
-                        rr, vv = x[:n], x[n:]
-                        acc = -MK @ rr - MC @ vv - MR - MG * (alpha + beta * t)
-                        return row @ (-MK @ vv - MC @ acc - MG * beta) + beta
-                ex.terminal = False
-                ex.direction = 0
-                ex.tracker = t_
-                evfuns.append(ex)
+                if TR[t_].any():
+                    evfuns.append(_extremum(TR[t_].copy(), t_, mode, alpha, beta, n))
             x0 = np.concatenate([r, v])
             sol = solve_ivp(rhs, (tau, dt), x0, method=method, rtol=rtol, atol=atol,
                             events=evfuns, max_step=max_step)
@@ -146,7 +159,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 if sol.t_events[k].size:
                     t_stop = min(t_stop, sol.t_events[k][0])
             for k in range(ne, len(evfuns)):
-                for te, ye in zip(sol.t_events[k], sol.y_events[k]):
+                for te, ye in zip(sol.t_events[k], sol.y_events[k], strict=True):
                     if te <= t_stop:
                         val, _ = tracker_values(mode, ye[:n], ye[n:], alpha + beta * te, beta)
                         peaks[evfuns[k].tracker] = max(peaks[evfuns[k].tracker],

@@ -217,7 +217,7 @@ def test_local_cluster_equals_serial(fake_records, small):
 
     serial = _run(small)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+                      dashboard_address=":0") as cluster, Client(cluster) as client:
         parallel = _run(small, scheduler=client)
     xr.testing.assert_identical(*_same_history(serial, parallel))
 

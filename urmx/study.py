@@ -265,7 +265,7 @@ def _client(scheduler: Any):
         n = os.cpu_count() or 1
         cluster = LocalCluster(n_workers=n if processes else 1,
                                threads_per_worker=1 if processes else n,
-                               processes=processes, dashboard_address=None)
+                               processes=processes, dashboard_address=":0")
         return Client(cluster), True
     return Client(scheduler), True
 

@@ -577,11 +577,12 @@ def _warm_workers(client) -> None:
     client.run(warm)
 
 
-def grid_scaling(quick: bool = False, batch_size: int = 16) -> dict:
+def grid_scaling(quick: bool = False, batch_size: int = 16, repeats: int | None = None) -> dict:
     """Analyses per second of a synthetic grid: in this process, and on LocalClusters of 1
     and 2 worker processes (>= 10,000 analyses); then the 100,000-analysis grid of issue 4
     on 2 workers."""
     n_cor, n_scale = (4, 4) if quick else (15, 15)  # 45 x 225 = 10,125 analyses
+    repeats = repeats or (1 if quick else 3)
     study, records = synthetic_study(n_cor, n_scale)
     out: dict[str, Any] = {
         "record": "synthetic: 5 s at 0.01 s (501 samples), 2 Hz sine under a triangular "
@@ -589,41 +590,53 @@ def grid_scaling(quick: bool = False, batch_size: int = 16) -> dict:
         "grid": f"{len(study.walls)} parametric walls x 5 diaphragms (D1-D5, single storey) "
                 f"x {n_cor} CORs (0.60-0.95) x {n_scale} scales (0.2-1.2)",
         "analyses": study.size, "batch_size": batch_size, "runs": []}
-    ds, t = run_grid(study, records, "serial", batch_size)  # warm this process
-    ds, t = run_grid(study, records, "serial", batch_size)
-    out["events_mean"] = None
+    ds, _ = run_grid(study, records, "serial", batch_size)  # warm this process
     out["collapsed_share"] = float((ds["collapsed"] == 1).mean())
-    out["runs"].append({"scheduler": "serial (this process)", "workers": 1, "seconds": t,
-                        "rate": study.size / t})
-    for n in (1, 2):
-        t0 = time.perf_counter()
-        client = _local_client(n)
-        try:
-            _warm_workers(client)
-            startup = time.perf_counter() - t0
-            _, t = run_grid(study, records, client, batch_size)
-        finally:
-            cluster = client.cluster
-            client.close()
+    # 1 and 2 workers alternate, `repeats` times each (medians): a machine shared with other
+    # work changes its load over minutes, and alternating spreads that over both
+    clients, startup, held = {}, {}, []
+    cpu: dict = {1: [], 2: []}  # CPU seconds the workers used per run
+    times: dict = {"serial": [], 1: [], 2: []}
+    try:
+        for n in (1, 2):
+            t0 = time.perf_counter()
+            clients[n] = _local_client(n)
+            _warm_workers(clients[n])
+            startup[n] = time.perf_counter() - t0
+            # keep the record scattered for the whole section: each run scatters the same
+            # samples under the same content key, and a key released by one run and
+            # scattered again by the next can be lost in between ("lost dependencies")
+            held.append(clients[n].scatter(records["synthetic"].acceleration, broadcast=True))
+        for _ in range(repeats):
+            times["serial"].append(run_grid(study, records, "serial", batch_size)[1])
+            for n in (1, 2):
+                c0 = clients[n].run(time.process_time)
+                times[n].append(run_grid(study, records, clients[n], batch_size)[1])
+                c1 = clients[n].run(time.process_time)
+                cpu[n].append(sum(c1[w] - c0[w] for w in c1 if w in c0))
+        # issue 4: a synthetic 100,000-analysis grid on the 2 local workers
+        n_cor, n_scale = (5, 10) if quick else (40, 56)  # 45 x 2240 = 100,800 analyses
+        big, recs = synthetic_study(n_cor, n_scale)
+        _, t_big = run_grid(big, recs, clients[2], batch_size)
+    finally:
+        for c in clients.values():
+            cluster = c.cluster
+            c.close()
             cluster.close()
-        out["runs"].append({"scheduler": f"LocalCluster, {n} worker process(es)",
-                            "workers": n, "seconds": t, "rate": study.size / t,
-                            "startup": startup})
+    for key, label in (("serial", "serial (this process)"),
+                       (1, "LocalCluster, 1 worker process"),
+                       (2, "LocalCluster, 2 worker processes")):
+        t = float(np.median(times[key]))
+        out["runs"].append({"scheduler": label, "workers": 1 if key == "serial" else key,
+                            "seconds": t, "rate": study.size / t, "repeats": len(times[key]),
+                            "all_seconds": times[key], "startup": startup.get(key)})
+        if key in cpu:  # worker CPU over wall time x workers: below 1, the workers waited
+            out["runs"][-1]["cpu_share"] = float(np.median(
+                [c / (w * key) for c, w in zip(cpu[key], times[key], strict=True)]))
     r1, r2 = out["runs"][1]["rate"], out["runs"][2]["rate"]
     out["scaling"] = r2 / r1
     out["met_scaling"] = out["scaling"] >= TARGET_SCALING
-    # issue 4: a synthetic 100,000-analysis grid on 2 local workers
-    n_cor, n_scale = (5, 10) if quick else (40, 56)  # 45 x 2240 = 100,800 analyses
-    big, recs = synthetic_study(n_cor, n_scale)
-    client = _local_client(2)
-    try:
-        _warm_workers(client)
-        _, t = run_grid(big, recs, client, batch_size)
-    finally:
-        cluster = client.cluster
-        client.close()
-        cluster.close()
-    out["big"] = {"analyses": big.size, "seconds": t, "rate": big.size / t,
+    out["big"] = {"analyses": big.size, "seconds": t_big, "rate": big.size / t_big,
                   "grid": f"{len(big.walls)} walls x 5 diaphragms x {n_cor} CORs x "
                           f"{n_scale} scales"}
     out["met_big"] = out["big"]["rate"] >= TARGET_GRID_RATE
@@ -634,12 +647,15 @@ def paper_timing(out_dir: str | os.PathLike | None = None) -> dict:
     """`urmx paper` end to end from a cold start: a fresh Python process (imports, numba
     cache loads, a new LocalCluster), writing into a temporary folder."""
     with tempfile.TemporaryDirectory(prefix="urmx-bench-paper-") as tmp:
-        dest = out_dir or tmp
-        cmd = [sys.executable, "-m", "urmx.cli", "paper", "--out", str(dest), "--quiet"]
+        dest = Path(out_dir or tmp)
+        # archives and report into the temporary folder: the checkout's reports/ is not touched
+        cmd = [sys.executable, "-m", "urmx.cli", "paper", "--out", str(dest / "results"),
+               "--report", str(dest / "report"), "--quiet"]
         t = time.perf_counter()
-        proc = subprocess.run(cmd, capture_output=True, text=True)
+        proc = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp)
         seconds = time.perf_counter() - t
-    return {"command": "urmx paper --out <tmp> --quiet", "seconds": seconds,
+    return {"command": "urmx paper --out <tmp>/results --report <tmp>/report --quiet",
+            "seconds": seconds,
             "returncode": proc.returncode, "stderr_tail": proc.stderr.strip()[-600:],
             "met": proc.returncode == 0 and seconds < TARGET_PAPER}
 
@@ -1154,15 +1170,17 @@ def _render_grid(g: dict | None, p: dict | None) -> list[str]:
         L += [f"Grid: {g['grid']} = **{g['analyses']:,} analyses**; record: {g['record']}. "
               f"Run through the study layer (`urmx.study` batches of {g['batch_size']} "
               "analyses, its scheduler code and Dataset assembly; no archive). Worker start-up "
-              "and the numba cache load on each worker are excluded (listed apart). "
+              "and the numba cache load on each worker are excluded (listed apart). Serial, 1 "
+              "and 2 workers alternate, medians of the repeats. "
               f"Collapsed share of the grid: {100 * g['collapsed_share']:.0f} %.", "",
               "| scheduler | workers | seconds | analyses/s | efficiency vs serial x workers "
-              "| start-up [s] |", "|---|---|---|---|---|---|"]
+              "| worker CPU / (wall x workers) | start-up [s] |",
+              "|---|---|---|---|---|---|---|"]
         serial = g["runs"][0]["rate"]
         for r in g["runs"]:
             L.append(f"| {r['scheduler']} | {r['workers']} | {r['seconds']:.2f} | "
                      f"{r['rate']:.0f} | {r['rate'] / (serial * r['workers']):.2f} | "
-                     f"{_f(r.get('startup'))} |")
+                     f"{_f(r.get('cpu_share'), 2)} | {_f(r.get('startup'))} |")
         b = g["big"]
         L += ["", f"2 workers over 1: **{g['scaling']:.2f}x** (target {TARGET_SCALING}x: "
               f"{_yes(g['met_scaling'])}).", "",
@@ -1175,9 +1193,11 @@ def _render_grid(g: dict | None, p: dict | None) -> list[str]:
                   "with the in-process (serial) rate times the workers. An efficiency well "
                   "below 1 on 1 worker is the scheduler's per-batch cost (task submission, "
                   "pickling, result transfer); on 2 workers it also includes the second core "
-                  "being shared with other processes (see the load average of the run); a "
-                  "serial rate below the target alone means the kernel itself is too slow "
-                  "for this record.", ""]
+                  "being shared with other processes (see the load average of the run). The "
+                  "CPU column tells the two apart: the CPU seconds the workers used over the "
+                  "wall time times the workers; well below 1 means the workers were waiting, "
+                  "for the scheduler or for a core other processes held. A serial rate below "
+                  "the target alone means the kernel itself is too slow for this record.", ""]
     if p:
         L += [f"`urmx paper` end to end from a cold start (a fresh process: imports, numba "
               f"cache, a new LocalCluster, three studies, the reports): **{p['seconds']:.1f} s**"

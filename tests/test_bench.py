@@ -78,6 +78,12 @@ def test_guard_verdict_logic():
     assert ok and any("not judged" in m for m in msgs)
 
 
+def test_error_verdict_three_ways():
+    assert bench.error_verdict(1e-12, 2e-12, 1e-9, 1e-9) is True  # reference clearly worse
+    assert bench.error_verdict(1e-12, 4e-12, 1e-15, 2e-12) is None  # both within resolution
+    assert bench.error_verdict(1e-3, 1e-14, 1e-12, 1e-3) is False  # kernel off, not round-off
+
+
 def test_baseline_round_trip_keeps_other_classes(tmp_path):
     path = tmp_path / "baseline.toml"
     bench.write_baseline(path, "arm64-8cpu", {"seconds": 0.0002, "cpu": 'M1 "Pro"'})
@@ -111,6 +117,8 @@ def _fake_sections():
             "rate_cold": 1666.0, "us_per_event": 0.7, "speedup": 5000.0,
             "converged_rtol": 1e-12, "converged_seconds": 3.0, "converged_events": 590,
             "error_kernel": peaks, "error_reference_1e-8": dict(peaks, max=1e-9),
+            "kernel_self_check": peaks, "reference_1e-8_vs_kernel": dict(peaks, max=1e-9),
+            "resolution": 1e-12,
             "met_rate": True, "met_speedup": True, "met_error": True,
             "profile": {"analyses": 10, "total_us": 400.0,
                         "top": [{"function": "kernel.py:_integrate", "calls": 1,

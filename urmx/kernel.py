@@ -244,15 +244,17 @@ def impact_velocity(P, L, v, base, crack, cor, law, Minv):
         j += 1
     if crack:
         J[j, :] = L[ROW_GC]
-    A = J @ Minv @ J.T
+    Jt = np.ascontiguousarray(J.T)
+    A = J @ Minv @ Jt
     if m == 2:
         det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
         if abs(det) <= 1e-12 * abs(A[0, 0] * A[1, 1]):
             J = J[:1, :].copy()
-            A = J @ Minv @ J.T
+            Jt = np.ascontiguousarray(J.T)
+            A = J @ Minv @ Jt
     rhs = (cor - 1.0) * (J @ v)
     lam = np.linalg.solve(A, rhs)
-    dv = Minv @ (J.T @ lam)
+    dv = Minv @ (Jt @ lam)
     for i in range(n):
         v[i] += dv[i]
 

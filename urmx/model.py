@@ -356,11 +356,12 @@ def system(P, family, bl, bu):
     KD[0, 0] += k1
     KD[1, 1] += k2
     R0q = np.array([r1, r2, 0.0])
-    M = T.T @ Mf @ T
-    C = T.T @ Cq @ T
-    K = T.T @ KD @ T
-    R0 = T.T @ R0q
-    Gv = T.T @ Mf[:, 2]
+    Tt = np.ascontiguousarray(T.T)
+    M = Tt @ Mf @ T
+    C = Tt @ Cq @ T
+    K = Tt @ KD @ T
+    R0 = Tt @ R0q
+    Gv = Tt @ np.ascontiguousarray(Mf[:, 2])
     Minv = np.linalg.inv(M)
     if T.shape[1] == 3:
         MinvG = e3.copy()

@@ -177,6 +177,18 @@ def _task(study: Study, batch: Batch, records: dict[str, RecordData],
                                ).hexdigest()[:20]
     return task
 
+def _unrun(shape) -> dict[str, np.ndarray]:
+    """Output arrays of cells not (yet) run: NaN, INT_FILL for integers, status not_run."""
+    out: dict[str, np.ndarray] = {}
+    for name in variables.SCALARS:
+        if name in variables.INTEGER_SCALARS:
+            out[name] = np.full(shape, INT_FILL, dtype=np.int32)
+        else:
+            out[name] = np.full(shape, np.nan)
+    out["status"] = np.full(shape, NOT_RUN, dtype=np.int8)
+    return out
+
+
 
 def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.ndarray]:
     """Run one batch through the kernel: numpy arrays of shape (walls, cor, scale, impact,
@@ -186,13 +198,7 @@ def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.nd
         from .kernel import run as kernel
     nw, nz = len(task["walls"]), len(task["walls"][0])
     shape = (nw, len(task["cor"]), len(task["scale"]), len(task["impact"]), nz)
-    out: dict[str, np.ndarray] = {}
-    for name in variables.SCALARS:
-        if name in variables.INTEGER_SCALARS:
-            out[name] = np.full(shape, INT_FILL, dtype=np.int32)
-        else:
-            out[name] = np.full(shape, np.nan)
-    out["status"] = np.full(shape, NOT_RUN, dtype=np.int8)
+    out = _unrun(shape)
     hist = {(iw, ic): label for iw, ic, label in task["history"]}
     labels = []
     for iw, ic, isc, ii, iz in np.ndindex(*shape):
@@ -384,13 +390,7 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
     dims = study.dims
     names = list(dims)
     shape = tuple(len(v) for v in dims.values())
-    data: dict[str, np.ndarray] = {}
-    for name in variables.SCALARS:
-        if name in variables.INTEGER_SCALARS:
-            data[name] = np.full(shape, INT_FILL, dtype=np.int32)
-        else:
-            data[name] = np.full(shape, np.nan)
-    data["status"] = np.full(shape, NOT_RUN, dtype=np.int8)
+    data = _unrun(shape)
     # batch arrays are (walls, cor, scale, impact, damping); drop the axes the study lacks
     drop = tuple(i + 2 for i, k in enumerate(("scale", "impact", "damping"))
                  if k not in study.extra)

@@ -127,8 +127,11 @@ def _fake_sections():
             "duration": 2.0, "events": 12, "status": "ok", "converged_rtol": 1e-12,
             "converged_events": 12, "converged_status": "ok", "kernel_seconds": 1e-4,
             "kernel_error": 0.0, "kernel_worst": "peak_lower_drift",
-            "reference": [{"rtol": 1e-3, "seconds": 0.1, "error": 1e-4, "events": 12},
-                          {"rtol": 1e-6, "seconds": 0.2, "error": math.nan, "failed": "x"}]}
+            "reference": {
+                "default": [{"rtol": 1e-3, "seconds": 0.1, "error": 1e-4, "events": 12},
+                            {"rtol": 1e-6, "seconds": 0.2, "error": math.nan, "failed": "x"}],
+                "no step cap": [{"rtol": 1e-3, "seconds": 0.05, "error": 1e-3, "events": 12},
+                                {"rtol": 1e-6, "seconds": 0.1, "error": 1e-7, "events": 12}]}}
     wp = {"window": 2.0, "rtols": [1e-3, 1e-6], "cases": [case], "figures": []}
     grid = {"record": "synthetic", "grid": "tiny", "analyses": 10, "batch_size": 16,
             "collapsed_share": 0.1,

@@ -28,6 +28,10 @@ def register(sub) -> None:
                    help="report to write; figures and JSON go to its folder without .md")
     p.add_argument("--paper", action="store_true",
                    help="with study/all: also time `urmx paper` from a cold start (long)")
+    p.add_argument("--window", type=float, default=20.0,
+                   help="records/all: seconds of each record in the work-precision study "
+                        "(default 20; 0 = whole records, slow: the reference costs about 1 ms "
+                        "per record step and tolerance)")
     p.add_argument("--update", action="store_true",
                    help="guard: store this measurement as the baseline of the machine class")
     p.add_argument("--baseline", default=None,
@@ -47,6 +51,6 @@ def _bench(args) -> int:
     names = list(GROUPS[args.what])
     if args.paper and args.what in ("study", "all"):
         names.insert(names.index("grid_scaling") + 1, "paper")
-    path = bench.run_sections(names, args.out, quick=args.quick)
+    path = bench.run_sections(names, args.out, quick=args.quick, window=args.window or None)
     print(path)
     return 0

@@ -1140,7 +1140,8 @@ def _render_wp(w: dict, figures_dir: str) -> list[str]:
          "take too long). Two reference series: its default, which caps the step at dt/8 "
          "(an 8th-order method on at least 8 steps per record step is near round-off at any "
          "rtol, so the cap, not rtol, sets its cost and accuracy), and no step cap, the "
-         "adaptive integrator as MATLAB's ode45 runs by default. The converged reference (default series) is the tightest of rtol "
+         "adaptive integrator as MATLAB's ode45 runs by default. The converged reference "
+         "(default series) is the tightest of rtol "
          f"{', '.join(f'{r:g}' for r in CONVERGED_RTOLS)} that runs and agrees with the next "
          f"looser one (same events, peaks within {SELF_CONVERGED:g}); the kernel column is "
          "the cross-check of the two.", "",

@@ -745,6 +745,8 @@ def hard_cases(quick: bool = False) -> dict:
             r["reference_s"] = time.perf_counter() - t0
             r["reference_events"] = rr["events"]
             r["agreement"] = rel_error(res, rr)["max"]
+            # every case must also agree with the reference (issue 2: 1e-6 in every peak)
+            r["ok"] = r["ok"] and r["agreement"] <= 1e-6 and res["status"] == rr["status"]
         rows.append(r)
         return res
 
@@ -775,9 +777,9 @@ def hard_cases(quick: bool = False) -> dict:
         dt, "max rel. energy change in free vibration", drift, drift <= 1e-9, cor=1.0)
     # both supports rigid: simultaneous contacts
     res = kernel.run(w12, ag_nh, dt_nh, scale=sf_nh)
-    row("both supports rigid (Wall 12, Nahanni)", w12, ag_nh, dt_nh,
+    row("both supports rigid (Wall 12, Nahanni; simultaneous contacts)", w12, ag_nh, dt_nh,
         "base / crack impacts", f"{res['base_impacts']} / {res['crack_impacts']}",
-        res["status"] == "ok", scale=sf_nh)
+        res["status"] in ("ok", "collapsed"), scale=sf_nh)
     # 1e9 N/m springs with zero diaphragm mass (Table II Wall 12 literally)
     stiff = w12.replace(bottom_stiffness=1e9, top_stiffness=1e9)
     soft = w12.replace(bottom_stiffness=5.5e5, top_stiffness=5.5e5)
@@ -808,7 +810,7 @@ def hard_cases(quick: bool = False) -> dict:
         rb = reference.run(bw, ag_ec, dt_ec, scale=lo, rtol=1e-10)
         ra = reference.run(bw, ag_ec, dt_ec, scale=hi, rtol=1e-10)
         same = (below["collapsed"], above["collapsed"]) == (rb["collapsed"], ra["collapsed"])
-        row(f"collapse bracket (benchmark wall, El Centro x {lo:.4g} / x {hi:.4g})", bw,
+        row(f"collapse bracket (benchmark wall, El Centro x {lo:.6g} / x {hi:.6g})", bw,
             ag_ec, dt_ec, "collapsed below / above; reference agrees; collapse time diff [s]",
             f"{below['collapsed']} / {above['collapsed']}; {same}; "
             f"{abs(above['collapse_time'] - ra['collapse_time']):.2g}",
@@ -983,8 +985,10 @@ def _f(x: float, d: int = 3) -> str:
 def render(sections: dict, figures_dir: str = "performance") -> str:
     """The Markdown of ``reports/performance.md`` from saved sections."""
     L: list[str] = ["# Performance: speed against error", ""]
-    L.append("Regenerate with `urmx bench all --paper` (about 20-40 minutes on a 2-core "
-             "machine; the parts: `urmx bench kernel|records|study|hard`). Timings are medians "
+    L.append("Regenerate with `urmx bench all --paper` (about 25 minutes on a 2-core "
+             "machine, most of it the reference solver in the work-precision study; "
+             "`--window 10` about halves that; the parts: `urmx bench "
+             "kernel|records|study|hard|guard`). Timings are medians "
              "over repeats, in one process unless stated; a *core* is one process. Each "
              "section lists the machine and the load it was measured under; numbers taken "
              "on a loaded machine are noisy.")

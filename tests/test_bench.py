@@ -64,6 +64,9 @@ def test_synthetic_grid_runs_through_the_study_layer():
     assert seconds > 0
     assert dict(ds.sizes)["scale"] == 2 and "diaphragm" in ds.dims
     assert int((ds["status"] == 3).sum()) == 0  # every cell ran
+    bb = bench.batch_balance(study, records)
+    assert bb["count"] == len(study.walls) * 5
+    assert 1.0 <= bb["best_speedup_2"] <= 2.0 and bb["largest"] <= bb["total"]
 
 
 def test_guard_verdict_logic():

@@ -1269,8 +1269,9 @@ def _render_grid(g: dict | None, p: dict | None) -> list[str]:
               f"{_yes(g['met_scaling'])}).", ""]
         bb = g.get("batches")
         if bb:
-            L += [f"Batches: {bb['count']} (one wall x one diaphragm over every COR and scale: "
-                  "the study layer does not split a wall's cells further), serial time "
+            L += [f"Batches: {bb['count']} (the study layer's batches: one diaphragm and a "
+                  "group of walls over every COR and scale; one wall's cells are never split, "
+                  "so here a batch is one wall on one diaphragm), serial time "
                   f"{bb['total']:.2f} s, largest {bb['largest']:.2f} s, median "
                   f"{bb['median']:.3f} s; the best 2 workers can do with these batches "
                   f"(handed out in order to the free worker) is "

@@ -268,6 +268,10 @@ def _client(scheduler: Any):
         return scheduler, False
     if scheduler in (None, "processes", "threads"):
         processes = scheduler != "threads"
+        if processes:
+            from .kernel import warm_up
+
+            warm_up()  # compile once here; the workers then load numba's cache
         n = os.cpu_count() or 1
         cluster = LocalCluster(n_workers=n if processes else 1,
                                threads_per_worker=1 if processes else n,

@@ -23,7 +23,7 @@ def _mode(P, ist, cache):
     key = (int(ist[K.I_FAM]), int(ist[K.I_BL]), int(ist[K.I_BU]))
     if key not in cache:
         M, C, Kmat, R0, MinvG, Minv = system(P, *key)
-        cache[key] = (Minv @ Kmat, Minv @ C, Minv @ R0, MinvG, Minv)
+        cache[key] = (Minv @ Kmat, Minv @ C, Minv @ R0, MinvG)
     return cache[key]
 
 
@@ -46,7 +46,7 @@ def _event(row, sig, kap, n):
 
 def _extremum(row, tracker, mode, alpha, beta, n):
     """Non-terminal event at an interior extremum of a peak output (its rate is zero)."""
-    MK, MC, MR, MG, _ = mode
+    MK, MC, MR, MG = mode
     if tracker < K.N_DISP:
         def ex(t, x):
             return row @ x[n:]
@@ -94,6 +94,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         atol = rtol * 1e-3 * wall.segment(2).theta_a
     max_step = dt / 8.0 if max_step is None else float(max_step)
     cache: dict = {}
+    Minv_fam = K.mass_inverses(P, law)
     TR = np.zeros((K.N_TRACK, n))
     rows = np.zeros((K.MAX_EV, n))
     sig = np.zeros(K.MAX_EV)
@@ -117,7 +118,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     hist = np.full((N + ntail if history else 1, 9 + 2 * n), np.nan)
 
     def tracker_values(mode, r, v, a, b):
-        MK, MC, MR, MG, _ = mode
+        MK, MC, MR, MG = mode
         acc = -MK @ r - MC @ v - MR - MG * a
         jerk = -MK @ v - MC @ acc - MG * b
         val = np.concatenate([TR[:K.N_DISP] @ r, TR[K.N_DISP:] @ acc + a])
@@ -142,7 +143,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         ev_here = 0
         while tau < dt and status == K.ST_OK:
             mode = _mode(P, ist, cache)
-            MK, MC, MR, MG, Minv = mode
+            MK, MC, MR, MG = mode
             ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
 
             rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
@@ -193,8 +194,8 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                     status = K.ST_EVENT_LIMIT
                     break
                 code = K.handle_event(P, L, ist, kind[k_ev], tgt[k_ev], r, v, float(cor), law,
-                                      float(window), alpha + beta * tau, MK, MC, MR, MG, Minv,
-                                      v_rest, counts)
+                                      float(window), alpha + beta * tau, MK, MC, MR, MG,
+                                      Minv_fam, v_rest, counts)
                 if code:
                     peaks[K.TR_RL if code == 1 else K.TR_RU] = 1.0
                     status = K.ST_COLLAPSED
@@ -202,7 +203,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                     break
                 K.tracker_rows(P, L, ist[K.I_FAM], TR)
                 mode = _mode(P, ist, cache)
-                MK, MC, MR, MG, Minv = mode
+                MK, MC, MR, MG = mode
                 val, _ = tracker_values(mode, r, v, alpha + beta * tau, beta)
                 bump(val)
                 ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
@@ -229,7 +230,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     outs[K.O_DURATION] = duration
     outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP] = counts
     outs[K.O_EVENTS] = events
-    res = K._scalars(wall, peaks, outs, status, ntail, dt, N)
+    res = K._scalars(peaks, outs, status)
     if history:
         res["history"] = K.history_dict(hist, dt, n)
     res["event_log"] = np.array(log).reshape(-1, 3)

@@ -71,6 +71,11 @@ WINDOW = 1e-6  # merged-impact window w [s]
 G_OPEN_FACTOR = 1e-6
 
 NMODES = 50
+# every numba array over the reduced coordinates r is padded to NP entries: the unused
+# trailing ones stay exactly zero (padded matrices have zero rows and columns there), so
+# every small loop has a constant trip count the compiler unrolls (measured: about 6x
+# faster than loops of run-time length 1-3 at these sizes)
+NP = 3
 # rows over q = [theta1, theta2, u_b] of the quantities the kernel watches
 ROW_T1, ROW_T2, ROW_UB, ROW_UC, ROW_UT, ROW_GC = range(6)
 # peak trackers (the first N_DISP act on r, the rest on r_dd plus the ground)
@@ -96,24 +101,41 @@ N_OUT = 8
 
 # ---- shared event semantics -----------------------------------------------------------
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _dot(a, b):
-    """Small dot product without BLAS (numba's np.dot calls BLAS, costly at n <= 3)."""
+    """Dot product of two padded vectors (no BLAS: numba's np.dot calls it, costly here)."""
     out = 0.0
-    for i in range(a.shape[0]):
+    for i in range(NP):
         out += a[i] * b[i]
     return out
 
 
+@njit(cache=True, _nrt=False, inline='always')
+def _rowdot(A, i, x):
+    """Row i of a padded matrix times a padded vector (no array view is created)."""
+    out = 0.0
+    for k in range(NP):
+        out += A[i, k] * x[k]
+    return out
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _copy_row(src, i, dst, k):
+    for j in range(NP):
+        dst[k, j] = src[i, j]
+
+
 @njit(cache=True)
 def watch_rows(P):
-    """Rows over the reduced coordinates r of theta1, theta2, u_b, u_c, u_t, g_crack.
+    """Rows over the padded reduced coordinates r of theta1, theta2, u_b, u_c, u_t, g_crack.
 
     Outputs fixed by a constraint get exactly zero rows (MODEL.md section 6)."""
     a1, a2 = P[P_A1], P[P_A2]
     Lq = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [a1, 0.0, 1.0],
                    [a1, a2, 1.0], [-1.0, 1.0, 0.0]])
-    L = Lq @ transform(P)
+    Ln = Lq @ transform(P)
+    L = np.zeros((6, NP))
+    L[:, :Ln.shape[1]] = Ln
     if P[P_RIGID_B] > 0.5:
         L[ROW_UB, :] = 0.0
     if P[P_RIGID_T] > 0.5:
@@ -121,37 +143,39 @@ def watch_rows(P):
     return L
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def tracker_rows(P, L, fam, out):
     """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
     a1, a2 = P[P_A1], P[P_A2]
     th0l = curve(P, lower_case(fam))[1]
     th01 = curve(P, 1)[1]
-    out[TR_UB, :] = L[ROW_UB]
-    out[TR_UC, :] = L[ROW_UC]
-    out[TR_UT, :] = L[ROW_UT]
-    out[TR_D1, :] = a1 * L[ROW_T1]
-    out[TR_D2, :] = a2 * L[ROW_T2]
-    out[TR_RL, :] = L[ROW_T1] / th0l
-    out[TR_RU, :] = L[ROW_T2] / th01
-    out[TR_AB, :] = L[ROW_UB]
-    out[TR_AC, :] = L[ROW_UC]
-    out[TR_AT, :] = L[ROW_UT]
+    for k in range(NP):
+        out[TR_UB, k] = L[ROW_UB, k]
+        out[TR_UC, k] = L[ROW_UC, k]
+        out[TR_UT, k] = L[ROW_UT, k]
+        out[TR_D1, k] = a1 * L[ROW_T1, k]
+        out[TR_D2, k] = a2 * L[ROW_T2, k]
+        out[TR_RL, k] = L[ROW_T1, k] / th0l
+        out[TR_RU, k] = L[ROW_T2, k] / th01
+        out[TR_AB, k] = L[ROW_UB, k]
+        out[TR_AC, k] = L[ROW_UC, k]
+        out[TR_AT, k] = L[ROW_UT, k]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def mode_index(fam, bl, bu):
     return (fam - 1) * 25 + (bl + 2) * 5 + (bu + 2)
 
 
-@njit(cache=True)
-def _branch_events(P, case, b, row, kind_branch, kind_collapse, k, rows, sig, kap, kind, tgt):
-    """Event functions e = sig*(row.r) + kap (event when e falls through 0) bounding the
-    signed branch b; signed boundaries, so passing through zero is never missed."""
+@njit(cache=True, _nrt=False)
+def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, sig, kap, kind,
+                   tgt):
+    """Event functions e = sig*(L[lrow].r) + kap (event when e falls through 0) bounding
+    the signed branch b; signed boundaries, so passing through zero is never missed."""
     M0, th0, Mi, ta, tb = curve(P, case)
     if b == 0:
         for sg in (1, -1):  # reaching +theta_a, -theta_a
-            rows[k, :] = row
+            _copy_row(L, lrow, rows, k)
             sig[k] = -sg
             kap[k] = ta
             kind[k] = kind_branch
@@ -161,13 +185,13 @@ def _branch_events(P, case, b, row, kind_branch, kind_collapse, k, rows, sig, ka
     sg = 1 if b > 0 else -1
     inner = ta if abs(b) == 1 else tb
     outer = tb if abs(b) == 1 else th0
-    rows[k, :] = row
+    _copy_row(L, lrow, rows, k)
     sig[k] = sg
     kap[k] = -inner
     kind[k] = kind_branch
     tgt[k] = 0 if abs(b) == 1 else sg
     k += 1
-    rows[k, :] = row
+    _copy_row(L, lrow, rows, k)
     sig[k] = -sg
     kap[k] = outer
     kind[k] = kind_branch if abs(b) == 1 else kind_collapse
@@ -176,16 +200,16 @@ def _branch_events(P, case, b, row, kind_branch, kind_collapse, k, rows, sig, ka
     return k
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
     """The event functions of the current piece; returns how many."""
     k = 0
     for which in range(2):
-        row = L[ROW_T1] if which == 0 else L[ROW_GC]
+        lrow = ROW_T1 if which == 0 else ROW_GC
         side = ist[I_S] if which == 0 else ist[I_C]
         is_open = ist[I_BOPEN] if which == 0 else ist[I_COPEN]
         if is_open:
-            rows[k, :] = row  # impact when side*g falls to zero
+            _copy_row(L, lrow, rows, k)  # impact when side*g falls to zero
             sig[k] = side
             kap[k] = 0.0
             kind[k] = EV_BASE_IMPACT if which == 0 else EV_CRACK_IMPACT
@@ -193,7 +217,7 @@ def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
             k += 1
         else:
             for sg in (1, -1):  # opening when |g| exceeds g_open
-                rows[k, :] = row
+                _copy_row(L, lrow, rows, k)
                 sig[k] = -sg
                 kap[k] = g_open
                 kind[k] = EV_BASE_OPEN if which == 0 else EV_CRACK_OPEN
@@ -201,23 +225,23 @@ def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
                 k += 1
     if ist[I_BOPEN] and ist[I_COPEN] and P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5:
         k -= 1  # both supports rigid: the two contacts are one coordinate, one impact
-    k = _branch_events(P, lower_case(ist[I_FAM]), ist[I_BL], L[ROW_T1], EV_LOWER,
+    k = _branch_events(P, lower_case(ist[I_FAM]), ist[I_BL], L, ROW_T1, EV_LOWER,
                        EV_COLLAPSE_LOWER, k, rows, sig, kap, kind, tgt)
-    k = _branch_events(P, 1, ist[I_BU], L[ROW_T2], EV_UPPER, EV_COLLAPSE_UPPER, k, rows,
+    k = _branch_events(P, 1, ist[I_BU], L, ROW_T2, EV_UPPER, EV_COLLAPSE_UPPER, k, rows,
                        sig, kap, kind, tgt)
     return k
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def set_family(P, ist, r, v, L):
     """Family from the pivot sides; a family change reclassifies the lower branch.
     Returns True when |theta1| is at or beyond the new case's theta0 (immediate collapse)."""
     fam = 1 if ist[I_S] == ist[I_C] else 2
-    th1 = _dot(L[ROW_T1], r)
+    th1 = _rowdot(L, ROW_T1, r)
     if fam != ist[I_FAM]:
         ist[I_FAM] = fam
         case = lower_case(fam)
-        ist[I_BL] = classify(P, case, th1, _dot(L[ROW_T1], v))
+        ist[I_BL] = classify(P, case, th1, _rowdot(L, ROW_T1, v))
         if abs(th1) >= curve(P, case)[1]:
             return True
     return False
@@ -225,58 +249,74 @@ def set_family(P, ist, r, v, L):
 
 @njit(cache=True)
 def mass_inverses(P, law):
-    """M^-1 of family 1 and 2 (the mass depends on the family only), built once per
+    """Padded M^-1 of family 1 and 2 (the mass depends on the family only), built once per
     analysis for the contact law; the scale law needs none (zeros)."""
     n = n_dof(P)
-    out = np.zeros((2, n, n))
+    out = np.zeros((2, NP, NP))
     if law == 1:
         for fam in (1, 2):
-            out[fam - 1] = system(P, fam, 0, 0)[5]
+            out[fam - 1, :n, :n] = system(P, fam, 0, 0)[5]
     return out
 
 
-@njit(cache=True)
-def impact_velocity(L, v, base, crack, cor, law, Minv):
-    """Velocity jump of an impact in reduced coordinates.
+@njit(cache=True, _nrt=False, inline='always')
+def _quad(Minv, f, L, i, j):
+    """L[i] . Minv[f] . L[j] over padded coordinates."""
+    out = 0.0
+    for k in range(NP):
+        s = 0.0
+        for q in range(NP):
+            s += L[i, q] * Minv[f, q, k]
+        out += s * L[j, k]
+    return out
 
-    scale: every rotational component times cor (an independent u_b rate unchanged).
+
+@njit(cache=True, _nrt=False)
+def impact_velocity(L, v, base, crack, cor, law, Minv, f):
+    """Velocity jump of an impact in padded reduced coordinates.
+
+    scale: every rotational component times cor. The rotations are the first two padded
+    entries (theta1 and theta2, or theta1 and a zero pad), an independent u_b the third,
+    which is unchanged.
     contact: v+ = v- + Minv J^T lam with J v+ = cor * J v- (generalised Newton law),
-    Minv of the pattern after the impact; parallel rows (both supports rigid) use one."""
-    n = v.shape[0]
+    Minv = Minv[f] of the pattern after the impact; parallel rows (both supports rigid)
+    use one."""
     if law == 0:
-        nrot = 2 if n == 3 else n
-        for i in range(nrot):
-            v[i] *= cor
+        v[0] *= cor
+        v[1] *= cor
         return
-    m = int(base) + int(crack)
-    J = np.zeros((m, n))
-    j = 0
-    if base:
-        J[j, :] = L[ROW_T1]
-        j += 1
-    if crack:
-        J[j, :] = L[ROW_GC]
-    Jt = np.ascontiguousarray(J.T)
-    A = J @ Minv @ Jt
-    if m == 2:
-        det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-        if abs(det) <= 1e-12 * abs(A[0, 0] * A[1, 1]):
-            J = J[:1, :].copy()
-            Jt = np.ascontiguousarray(J.T)
-            A = J @ Minv @ Jt
-    rhs = (cor - 1.0) * (J @ v)
-    lam = np.linalg.solve(A, rhs)
-    dv = Minv @ (Jt @ lam)
-    for i in range(n):
-        v[i] += dv[i]
+    ja = ROW_T1 if base else ROW_GC
+    jb = ROW_GC
+    two = base and crack
+    Aaa = _quad(Minv, f, L, ja, ja)
+    if two:
+        Aab = _quad(Minv, f, L, ja, jb)
+        Aba = _quad(Minv, f, L, jb, ja)
+        Abb = _quad(Minv, f, L, jb, jb)
+        det = Aaa * Abb - Aab * Aba
+        if abs(det) <= 1e-12 * abs(Aaa * Abb):
+            two = False
+    ra = (cor - 1.0) * _rowdot(L, ja, v)
+    if two:
+        rb = (cor - 1.0) * _rowdot(L, jb, v)
+        lam_a = (ra * Abb - Aab * rb) / det
+        lam_b = (Aaa * rb - Aba * ra) / det
+    else:
+        lam_a = ra / Aaa
+        lam_b = 0.0
+    for i in range(NP):
+        s = 0.0
+        for k in range(NP):
+            s += Minv[f, i, k] * (L[ja, k] * lam_a + L[jb, k] * lam_b)
+        v[i] += s
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, MR, MG,
                  Minv_fam, v_rest, counts):
-    """Carry out one event at the current state (shared by both solvers).
+    """Carry out one event at the current state (shared by both solvers; padded arrays).
 
-    Minv_fam: M^-1 per family (:func:`mass_inverses`), used by the contact law.
+    Minv_fam: padded M^-1 per family (:func:`mass_inverses`), used by the contact law.
 
     Updates the integer state ist and the velocities v in place and counts impacts.
     Returns 0, or 1 / 2 when the lower / upper segment collapses (terminal)."""
@@ -309,11 +349,11 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
         # impact, closes within the window w (MODEL.md section 7)
         other_open = ist[I_COPEN] if base else ist[I_BOPEN]
         if other_open:
-            row = L[ROW_GC] if base else L[ROW_T1]
+            lrow = ROW_GC if base else ROW_T1
             side = ist[I_C] if base else ist[I_S]
-            eo = side * _dot(row, r)
-            edo = side * _dot(row, v)
-            eddo = side * _row_acc(row, MK, MC, MR, MG, r, v, ag_now)
+            eo = side * _rowdot(L, lrow, r)
+            edo = side * _rowdot(L, lrow, v)
+            eddo = side * _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag_now)
             if edo < 0.0 and eo + edo * window + 0.5 * eddo * window * window <= 0.0:
                 base = True
                 crack = True
@@ -325,18 +365,30 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
         ist[I_C] = -ist[I_C]
         counts[1] += 1
     fam_after = 1 if ist[I_S] == ist[I_C] else 2
-    impact_velocity(L, v, base, crack, cor, law, Minv_fam[fam_after - 1])
+    impact_velocity(L, v, base, crack, cor, law, Minv_fam, fam_after - 1)
     # a joint left slower than v_rest is closed again, under the opening rule
-    if base and abs(_dot(L[ROW_T1], v)) < v_rest:
+    if base and abs(_rowdot(L, ROW_T1, v)) < v_rest:
         ist[I_BOPEN] = 0
-    if crack and abs(_dot(L[ROW_GC], v)) < v_rest:
+    if crack and abs(_rowdot(L, ROW_GC, v)) < v_rest:
         ist[I_COPEN] = 0
     return 1 if set_family(P, ist, r, v, L) else 0
 
 
+@njit(cache=True, _nrt=False, inline='always')
+def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
+    """Relative acceleration of the quantity of row L[lrow] (padded arrays)."""
+    out = 0.0
+    for i in range(NP):
+        s = -MR[i] - MG[i] * ag
+        for k in range(NP):
+            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
+        out += L[lrow, i] * s
+    return out
+
+
 # ---- numerics: modes, Taylor series, scalar polynomials -------------------------------
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _norm_inf(A):
     best = 0.0
     for i in range(A.shape[0]):
@@ -347,13 +399,13 @@ def _norm_inf(A):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
     """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
-    r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t). Returns the number of terms."""
-    n = r0.shape[0]
+    r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays). Returns the number of
+    terms."""
     big = 0.0
-    for i in range(n):
+    for i in range(NP):
         D[0, i] = r0[i]
         D[1, i] = v0[i] * h
         big = max(big, abs(D[0, i]), abs(D[1, i]))
@@ -362,9 +414,9 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
         c = h * h / ((j + 1.0) * (j + 2.0))
         q = (j + 1.0) / h
         mx = 0.0
-        for i in range(n):
+        for i in range(NP):
             acc = 0.0
-            for k in range(n):
+            for k in range(NP):
                 acc -= MK[i, k] * D[j, k] + q * MC[i, k] * D[j + 1, k]
             if j == 0:
                 acc -= MR[i] + MG[i] * a0
@@ -377,18 +429,17 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
         big = max(big, mx)
         if j >= 3:
             prev = 0.0
-            for i in range(n):
+            for i in range(NP):
                 prev = max(prev, abs(D[j + 1, i]))
             if (mx + prev) * (j + 2.0) ** 3 <= 1e-17 * big:
                 break
     return m
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _sum_state(D, m, s, h, r, v):
     """r(s h) and r_d(s h) from the Taylor coefficients."""
-    n = r.shape[0]
-    for i in range(n):
+    for i in range(NP):
         p = D[m - 1, i]
         dp = 0.0
         for j in range(m - 2, -1, -1):
@@ -398,30 +449,29 @@ def _sum_state(D, m, s, h, r, v):
         v[i] = dp / h
 
 
-@njit(cache=True, inline='always')
-def _scalar_poly(row, D, m, acc_kind, h, a0, beta, sig, kap, cf):
+@njit(cache=True, _nrt=False, inline='always')
+def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of sig*row.r + kap (displacement kind) or of
-    row.r_dd + xg_dd (acceleration kind). Returns their number."""
-    n = row.shape[0]
+    row.r_dd + xg_dd (acceleration kind), row = R[ri]. Returns their number."""
     if not acc_kind:
         for j in range(m):
             s = 0.0
-            for i in range(n):
-                s += row[i] * D[j, i]
+            for i in range(NP):
+                s += R[ri, i] * D[j, i]
             cf[j] = sig * s
         cf[0] += kap
         return m
     for j in range(m - 2):
         s = 0.0
-        for i in range(n):
-            s += row[i] * D[j + 2, i]
+        for i in range(NP):
+            s += R[ri, i] * D[j + 2, i]
         cf[j] = (j + 2.0) * (j + 1.0) * s / (h * h)
     cf[0] += a0
     cf[1] += beta * h
     return m - 2
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
@@ -433,7 +483,7 @@ def _peval(cf, m, s):
     return p, dp, 2.0 * ddp
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _solve(cf, m, lo, hi, deriv, tol, guess):
     """Bracketed Newton on f = poly (deriv=0) or poly' (deriv=1) over [lo, hi] where f
     changes sign; stops on the bracket width. Returns (a, b): f(a) has the sign of
@@ -465,7 +515,7 @@ def _solve(cf, m, lo, hi, deriv, tol, guess):
     return a, b
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _lower_bound(cf, m):
     """A rigorous lower bound of the polynomial on [0, 1]: c0 - sum_j>=1 |c_j|."""
     out = cf[0]
@@ -474,7 +524,7 @@ def _lower_bound(cf, m):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _positive_max(cf, m):
     """For a polynomial starting at or below zero with a positive slope and ending at or
     below zero: the point of its first maximum if that maximum is positive, else -1."""
@@ -492,7 +542,7 @@ def _positive_max(cf, m):
     return -1.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _first_nonpositive(cf, m, single_min):
     """A point s in (0, 1] where the polynomial (positive at 0) is <= 0, at or before
     its first interior minimum that reaches zero; 2.0 when it stays positive.
@@ -520,7 +570,7 @@ def _first_nonpositive(cf, m, single_min):
     return 2.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _hermite_ext(p0, p1, m0, m1):
     """Interior extrema of the cubic Hermite interpolant on [0, 1]: (min, max, s_min,
     s_max); +inf/-inf when none."""
@@ -557,103 +607,127 @@ def _hermite_ext(p0, p1, m0, m1):
 
 @njit(cache=True)
 def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D):
-    """Fill the cached tables of one piece: M^-1 K, M^-1 C, M^-1, M^-1 R0, M^-1 G and the
-    exact propagator over h = dt/nsub (state transition E and the responses to the
+    """Fill the cached tables of one piece (padded): M^-1 K, M^-1 C, M^-1 R0, M^-1 G and
+    the exact propagator over h = dt/nsub (state transition E and the responses to the
     resistance, constant and ramp forcing), each column summed from its Taylor series."""
     M, C, K, R0, MinvG, Minv = system(P, fam, bl, bu)
     n = M.shape[0]
-    MK = Minv @ K
-    MC = Minv @ C
-    MR = Minv @ R0
+    MKn = Minv @ K
+    MCn = Minv @ C
+    MRn = Minv @ R0
+    MK = np.zeros((NP, NP))
+    MC = np.zeros((NP, NP))
+    MR = np.zeros(NP)
+    MG = np.zeros(NP)
+    MK[:n, :n] = MKn
+    MC[:n, :n] = MCn
+    MR[:n] = MRn
+    MG[:n] = MinvG
     mats[idx, 0] = MK
     mats[idx, 1] = MC
-    mats[idx, 2] = Minv
     vecs[idx, 0] = MR
-    vecs[idx, 1] = MinvG
+    vecs[idx, 1] = MG
     # nu: the spectral radius of the first-order matrix [[0, I], [-M^-1 K, -M^-1 C]]
     # (the norm bound sqrt|M^-1 K| + |M^-1 C| is about twice as large for stiff springs)
     A = np.zeros((2 * n, 2 * n), np.complex128)
     for i in range(n):
         A[i, n + i] = 1.0
         for j in range(n):
-            A[n + i, j] = -MK[i, j]
-            A[n + i, n + j] = -MC[i, j]
+            A[n + i, j] = -MKn[i, j]
+            A[n + i, n + j] = -MCn[i, j]
     nu = np.max(np.abs(np.linalg.eigvals(A)))
     if not np.isfinite(nu):
-        nu = math.sqrt(_norm_inf(MK)) + _norm_inf(MC)
+        nu = math.sqrt(_norm_inf(MKn)) + _norm_inf(MCn)
     ns = max(1, int(math.ceil(nu * dt / RHO)))
     nsub[idx] = ns
     h = dt / ns
-    z = np.zeros(n)
-    e = np.zeros(n)
-    r = np.zeros(n)
-    v = np.zeros(n)
-    for col in range(2 * n):
+    z = np.zeros(NP)
+    e = np.zeros(NP)
+    r = np.zeros(NP)
+    v = np.zeros(NP)
+    prop[idx] = 0.0
+    for col in range(2 * NP):
+        i = col if col < NP else col - NP
+        if i >= n:
+            continue  # a padding coordinate: zero column
         e[:] = 0.0
-        z[:] = 0.0
-        if col < n:
-            e[col] = 1.0
+        e[i] = 1.0
+        if col < NP:
             m = _taylor(MK, MC, z, z, e, z, 0.0, 0.0, h, D)
         else:
-            e[col - n] = 1.0
             m = _taylor(MK, MC, z, z, z, e, 0.0, 0.0, h, D)
         _sum_state(D, m, 1.0, h, r, v)
-        prop[idx, :n, col] = r
-        prop[idx, n:, col] = v
+        prop[idx, :NP, col] = r
+        prop[idx, NP:, col] = v
     for which in range(3):
         if which == 0:
             m = _taylor(MK, MC, MR, z, z, z, 0.0, 0.0, h, D)
         elif which == 1:
-            m = _taylor(MK, MC, z, MinvG, z, z, 1.0, 0.0, h, D)
+            m = _taylor(MK, MC, z, MG, z, z, 1.0, 0.0, h, D)
         else:
-            m = _taylor(MK, MC, z, MinvG, z, z, 0.0, 1.0, h, D)
+            m = _taylor(MK, MC, z, MG, z, z, 0.0, 1.0, h, D)
         _sum_state(D, m, 1.0, h, r, v)
-        pvec[idx, which, :n] = r
-        pvec[idx, which, n:] = v
+        pvec[idx, which, :NP] = r
+        pvec[idx, which, NP:] = v
     ready[idx] = True
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _load_mode(mats, vecs, prop, pvec, mid, MK, MC, MR, MG, E, PV):
+    """Copy the cached tables of piece mid into the integrator's work arrays."""
+    for i in range(NP):
+        MR[i] = vecs[mid, 0, i]
+        MG[i] = vecs[mid, 1, i]
+        for k in range(NP):
+            MK[i, k] = mats[mid, 0, i, k]
+            MC[i, k] = mats[mid, 1, i, k]
+    for i in range(2 * NP):
+        for w in range(3):
+            PV[w, i] = pvec[mid, w, i]
+        for k in range(2 * NP):
+            E[i, k] = prop[mid, i, k]
 
 
 # ---- the integrator ---------------------------------------------------------------------
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
     """Tracker values and rates at one instant (accelerations absolute); acc and jerk
     are scratch arrays."""
-    n = r.shape[0]
-    for i in range(n):
+    for i in range(NP):
         s = -MR[i] - MG[i] * ag
-        for k in range(n):
+        for k in range(NP):
             s -= MK[i, k] * r[k] + MC[i, k] * v[k]
         acc[i] = s
-    for i in range(n):
+    for i in range(NP):
         s = -MG[i] * beta
-        for k in range(n):
+        for k in range(NP):
             s -= MK[i, k] * v[k] + MC[i, k] * acc[k]
         jerk[i] = s
-    for t in range(N_TRACK):
+    for t in range(N_DISP):
         a = 0.0
         b = 0.0
-        if t < N_DISP:
-            for k in range(n):
-                a += TR[t, k] * r[k]
-                b += TR[t, k] * v[k]
-        else:
-            for k in range(n):
-                a += TR[t, k] * acc[k]
-                b += TR[t, k] * jerk[k]
-            a += ag
-            b += beta
+        for k in range(NP):
+            a += TR[t, k] * r[k]
+            b += TR[t, k] * v[k]
         val[t] = a
         der[t] = b
+    for t in range(N_DISP, N_TRACK):
+        a = 0.0
+        b = 0.0
+        for k in range(NP):
+            a += TR[t, k] * acc[k]
+            b += TR[t, k] * jerk[k]
+        val[t] = a + ag
+        der[t] = b + beta
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _events_at(rows, sig, kap, ne, r, v, e, ed):
-    n = r.shape[0]
     for k in range(ne):
         a = 0.0
         b = 0.0
-        for i in range(n):
+        for i in range(NP):
             a += rows[k, i] * r[i]
             b += rows[k, i] * v[i]
         e[k] = sig[k] * a + kap[k]
@@ -667,15 +741,12 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist, hist[k, :] at every grid
     point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t, pattern, then r, v).
     Returns a status code."""
-    n = n_dof(P)
-    N = ag.shape[0]
-    nsteps = N - 1 + ntail
     L = watch_rows(P)
-    TR = np.zeros((N_TRACK, n))
-    D = np.zeros((KMAX, n))
+    TR = np.zeros((N_TRACK, NP))
+    D = np.zeros((KMAX, NP))
     cf = np.zeros(KMAX)
     ist = np.zeros(N_IST, np.int64)
-    rows = np.zeros((MAX_EV, n))
+    rows = np.zeros((MAX_EV, NP))
     sig = np.zeros(MAX_EV)
     kap = np.zeros(MAX_EV)
     kind = np.zeros(MAX_EV, np.int64)
@@ -688,14 +759,50 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     der_a = np.zeros(N_TRACK)
     val_b = np.zeros(N_TRACK)
     der_b = np.zeros(N_TRACK)
-    r = np.zeros(n)
-    v = np.zeros(n)
-    rb = np.zeros(n)
-    vb = np.zeros(n)
-    xa = np.zeros(2 * n)
-    sacc = np.zeros(n)
-    sjerk = np.zeros(n)
+    r = np.zeros(NP)
+    v = np.zeros(NP)
+    rb = np.zeros(NP)
+    vb = np.zeros(NP)
+    xa = np.zeros(2 * NP)
+    sacc = np.zeros(NP)
+    sjerk = np.zeros(NP)
+    MK = np.zeros((NP, NP))
+    MC = np.zeros((NP, NP))
+    MR = np.zeros(NP)
+    MG = np.zeros(NP)
+    E = np.zeros((2 * NP, 2 * NP))
+    PV = np.zeros((3, 2 * NP))
     Minv_fam = mass_inverses(P, law)
+    counts = np.zeros(2, np.int64)  # base, crack impacts
+    # every piece's tables, built once per wall and record step (_march cannot allocate)
+    for fam in (1, 2):
+        for bl in range(-2, 3):
+            for bu in range(-2, 3):
+                mid = mode_index(fam, bl, bu)
+                if not ready[mid]:
+                    _build_mode(P, fam, bl, bu, dt, mid, ready, nsub, mats, vecs, prop, pvec, D)
+    return _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec,
+                  peaks, outs, hist, want_hist, evlog, L, TR, D, cf, ist, rows, kind, tgt,
+                  Minv_fam, counts, (sig, kap, e_a, ed_a, e_b, ed_b),
+                  (val_a, der_a, val_b, der_b), (r, v, rb, vb, xa, sacc, sjerk, MR, MG),
+                  (MK, MC, E, PV))
+
+
+@njit(cache=True, _nrt=False)
+def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, peaks,
+           outs, hist, want_hist, evlog, L, TR, D, cf, ist, rows, kind, tgt, Minv_fam,
+           counts, evbuf, trbuf, vecbuf, matbuf):
+    """The integration loop of :func:`_integrate`, on the work arrays it allocated.
+
+    Compiled without numba's reference counting (``_nrt=False``): it never allocates, and
+    the counting of every array passed to every helper cost more than the arithmetic."""
+    sig, kap, e_a, ed_a, e_b, ed_b = evbuf
+    val_a, der_a, val_b, der_b = trbuf
+    r, v, rb, vb, xa, sacc, sjerk, MR, MG = vecbuf
+    MK, MC, E, PV = matbuf
+    n = n_dof(P)
+    N = ag.shape[0]
+    nsteps = N - 1 + ntail
     g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
     v_rest = g_open / dt
     # start: at rest, family 2, provisional sides against the first ground motion
@@ -721,20 +828,12 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     n_events = 0
     n_sub = 0
     n_series = 0
-    counts = np.zeros(2, np.int64)  # base, crack impacts
     t_end = nsteps * dt
     tracker_rows(P, L, ist[I_FAM], TR)
     mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
-    if not ready[mid]:
-        _build_mode(P, ist[I_FAM], ist[I_BL], ist[I_BU], dt, mid, ready, nsub, mats, vecs,
-                    prop, pvec, D)
     ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
     _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
-    MK = mats[mid, 0]
-    MC = mats[mid, 1]
-    MR = vecs[mid, 0]
-    MG = vecs[mid, 1]
-    E = prop[mid]
+    _load_mode(mats, vecs, prop, pvec, mid, MK, MC, MR, MG, E, PV)
     a_now = ag[0] if N > 0 else 0.0
     beta0 = (ag[1] - ag[0]) / dt if N > 1 else 0.0
     _point(MK, MC, MR, MG, TR, r, v, a_now, beta0, val_a, der_a, sacc, sjerk)
@@ -760,7 +859,7 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
         if step > 0:
             dbeta = beta - beta_prev
             for t in range(N_DISP, N_TRACK):
-                der_a[t] += dbeta * (1.0 - _dot(TR[t], MG))
+                der_a[t] += dbeta * (1.0 - _rowdot(TR, t, MG))
         beta_prev = beta
         while True:
             ns = nsub[mid]
@@ -776,16 +875,15 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
             full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
             m_taylor = 0
             if full:
-                for i in range(n):
+                for i in range(NP):
                     xa[i] = r[i]
-                    xa[n + i] = v[i]
-                for i in range(n):
-                    s1 = pvec[mid, 0, i] + a0 * pvec[mid, 1, i] + beta * pvec[mid, 2, i]
-                    s2 = (pvec[mid, 0, n + i] + a0 * pvec[mid, 1, n + i]
-                          + beta * pvec[mid, 2, n + i])
-                    for k in range(2 * n):
+                    xa[NP + i] = v[i]
+                for i in range(NP):
+                    s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
+                    s2 = PV[0, NP + i] + a0 * PV[1, NP + i] + beta * PV[2, NP + i]
+                    for k in range(2 * NP):
                         s1 += E[i, k] * xa[k]
-                        s2 += E[n + i, k] * xa[k]
+                        s2 += E[NP + i, k] * xa[k]
                     rb[i] = s1
                     vb[i] = s2
             else:
@@ -814,7 +912,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                     continue
                 if m_taylor == 0:
                     m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
-                mc = _scalar_poly(rows[k], D, m_taylor, False, H, 0.0, 0.0, sig[k], kap[k], cf)
+                mc = _scalar_poly(rows, k, D, m_taylor, False, H, 0.0, 0.0, sig[k], kap[k],
+                                  cf)
                 s_lo = 0.0
                 s_hi = 1.0
                 if rebound:
@@ -850,7 +949,7 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                 if ist[I_FAM] == 1:
                     fam1_time += H
                 tau = tb
-                for i in range(n):
+                for i in range(NP):
                     r[i] = rb[i]
                     v[i] = vb[i]
                 for t in range(N_TRACK):
@@ -878,7 +977,7 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
             if ist[I_FAM] == 1:
                 fam1_time += He
             tau = te_loc
-            for i in range(n):
+            for i in range(NP):
                 r[i] = rb[i]
                 v[i] = vb[i]
             # handle this event and every other one due at the same instant
@@ -906,15 +1005,8 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                 # new piece
                 tracker_rows(P, L, ist[I_FAM], TR)
                 mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
-                if not ready[mid]:
-                    _build_mode(P, ist[I_FAM], ist[I_BL], ist[I_BU], dt, mid, ready, nsub, mats,
-                                vecs, prop, pvec, D)
                 ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-                MK = mats[mid, 0]
-                MC = mats[mid, 1]
-                MR = vecs[mid, 0]
-                MG = vecs[mid, 1]
-                E = prop[mid]
+                _load_mode(mats, vecs, prop, pvec, mid, MK, MC, MR, MG, E, PV)
                 _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc,
                        sjerk)
                 for t in range(N_TRACK):  # the one-sided values after the event
@@ -957,22 +1049,10 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     return status
 
 
-@njit(cache=True, inline='always')
-def _row_acc(row, MK, MC, MR, MG, r, v, ag):
-    n = r.shape[0]
-    out = 0.0
-    for i in range(n):
-        s = -MR[i] - MG[i] * ag
-        for k in range(n):
-            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
-        out += row[i] * s
-    return out
-
-
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _record(hist, k, L, ist, r, v, val, n):
-    hist[k, 0] = _dot(L[ROW_T1], r)
-    hist[k, 1] = _dot(L[ROW_T2], r)
+    hist[k, 0] = _rowdot(L, ROW_T1, r)
+    hist[k, 1] = _rowdot(L, ROW_T2, r)
     hist[k, 2] = val[TR_UB]
     hist[k, 3] = val[TR_UC]
     hist[k, 4] = val[TR_UT]
@@ -985,7 +1065,7 @@ def _record(hist, k, L, ist, r, v, val, n):
         hist[k, 9 + n + i] = v[i]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, _nrt=False, inline='always')
 def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
                 MG, r, v, a0, beta, H):
     """Peak update over [0, s_end*H] of a sub-step of length H from the end values and
@@ -998,13 +1078,18 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
             peaks[t] = vb
         if der_a[t] * der_b[t] >= 0.0:
             continue
+        # |Hermite cubic| <= max(|p0|, |p1|) + 4/27 (|m0| + |m1|) on [0, 1]: most extrema
+        # are far below the running peak and need no closer look
+        bound = max(vb, abs(val_a[t])) + (4.0 / 27.0) * Hs * (abs(der_a[t]) + abs(der_b[t]))
+        if bound * (1.0 + 1e-12) < peaks[t] * (1.0 - GATE):
+            continue
         lo, hi, slo, shi = _hermite_ext(val_a[t], val_b[t], der_a[t] * Hs, der_b[t] * Hs)
         est = max(abs(lo) if lo != np.inf else 0.0, abs(hi) if hi != -np.inf else 0.0)
         if est < peaks[t] * (1.0 - GATE):
             continue
         if m_taylor == 0:
             m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
-        mc = _scalar_poly(TR[t], D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
+        mc = _scalar_poly(TR, t, D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
         guess = s_end * (slo if abs(lo) >= abs(hi) else shi)
         lo_, hi_ = _solve(cf, mc, 0.0, s_end, 1, 1e-13, guess)
         x = abs(_peval(cf, mc, 0.5 * (lo_ + hi_))[0])
@@ -1025,10 +1110,9 @@ def _tables(wall: Wall, dt: float):
     key = (wall.params.tobytes(), float(dt))
     tab = _TABLES.get(key)
     if tab is None:
-        n = int(n_dof(wall.params))
         tab = (np.zeros(NMODES, np.bool_), np.zeros(NMODES, np.int64),
-               np.zeros((NMODES, 3, n, n)), np.zeros((NMODES, 2, n)),
-               np.zeros((NMODES, 2 * n, 2 * n)), np.zeros((NMODES, 3, 2 * n)))
+               np.zeros((NMODES, 2, NP, NP)), np.zeros((NMODES, 2, NP)),
+               np.zeros((NMODES, 2 * NP, 2 * NP)), np.zeros((NMODES, 3, 2 * NP)))
         _TABLES[key] = tab
         if len(_TABLES) > _TABLES_MAX:
             _TABLES.popitem(last=False)

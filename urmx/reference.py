@@ -20,11 +20,21 @@ from .model import n_dof, system
 
 
 def _mode(P, ist, cache):
+    """(M^-1 K, M^-1 C, M^-1 R0, M^-1 G) of the piece, and the same padded to
+    urmx.kernel.NP coordinates for the shared numba event functions."""
     key = (int(ist[K.I_FAM]), int(ist[K.I_BL]), int(ist[K.I_BU]))
     if key not in cache:
         M, C, Kmat, R0, MinvG, Minv = system(P, *key)
-        cache[key] = (Minv @ Kmat, Minv @ C, Minv @ R0, MinvG)
+        mode = (Minv @ Kmat, Minv @ C, Minv @ R0, MinvG)
+        cache[key] = mode, tuple(_pad(x) for x in mode)
     return cache[key]
+
+
+def _pad(x):
+    """A vector or square matrix padded with zeros to urmx.kernel.NP coordinates."""
+    out = np.zeros((K.NP,) * x.ndim)
+    out[tuple(slice(0, s) for s in x.shape)] = x
+    return out
 
 
 def _rhs(MK, MC, MR, MG, alpha, beta, n):
@@ -85,7 +95,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         raise ValueError(f"rtol={rtol!r} must lie in (0, 1)")
     P = wall.params
     n = int(n_dof(P))
-    L = K.watch_rows(P)
+    L = K.watch_rows(P)  # padded rows (the shared event functions use them)
     N = ag.size
     nsteps = N - 1 + ntail
     g_open = K.G_OPEN_FACTOR * wall.segment(2).theta_a
@@ -95,8 +105,9 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     max_step = dt / 8.0 if max_step is None else float(max_step)
     cache: dict = {}
     Minv_fam = K.mass_inverses(P, law)
-    TR = np.zeros((K.N_TRACK, n))
-    rows = np.zeros((K.MAX_EV, n))
+    TRp = np.zeros((K.N_TRACK, K.NP))
+    TR = TRp[:, :n]  # a view: tracker_rows fills TRp
+    rows = np.zeros((K.MAX_EV, K.NP))
     sig = np.zeros(K.MAX_EV)
     kap = np.zeros(K.MAX_EV)
     kind = np.zeros(K.MAX_EV, np.int64)
@@ -128,13 +139,13 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     def bump(val):
         np.maximum(peaks, np.abs(val), out=peaks)
 
-    K.tracker_rows(P, L, ist[K.I_FAM], TR)
-    mode = _mode(P, ist, cache)
+    K.tracker_rows(P, L, ist[K.I_FAM], TRp)
+    mode, _ = _mode(P, ist, cache)
     b0 = (ag[1] - ag[0]) / dt
     val, _ = tracker_values(mode, r, v, ag[0], b0)
     bump(val)
     if history:
-        K._record(hist, 0, L, ist, r, v, val, n)
+        K._record(hist, 0, L, ist, _pad(r), _pad(v), val, n)
     duration = nsteps * dt
     for step in range(nsteps):
         alpha, beta = (ag[step], (ag[step + 1] - ag[step]) / dt) if step < N - 1 else (0., 0.)
@@ -142,12 +153,12 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         tau = 0.0
         ev_here = 0
         while tau < dt and status == K.ST_OK:
-            mode = _mode(P, ist, cache)
+            mode, padded = _mode(P, ist, cache)
             MK, MC, MR, MG = mode
             ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
 
             rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
-            evfuns = [_event(rows[k].copy(), sig[k], kap[k], n) for k in range(ne)]
+            evfuns = [_event(rows[k, :n].copy(), sig[k], kap[k], n) for k in range(ne)]
             for t_ in range(K.N_TRACK):
                 if TR[t_].any():
                     evfuns.append(_extremum(TR[t_].copy(), t_, mode, alpha, beta, n))
@@ -193,34 +204,36 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 if ev_here > K.MAX_EVENTS_PER_STEP:
                     status = K.ST_EVENT_LIMIT
                     break
-                code = K.handle_event(P, L, ist, kind[k_ev], tgt[k_ev], r, v, float(cor), law,
-                                      float(window), alpha + beta * tau, MK, MC, MR, MG,
-                                      Minv_fam, v_rest, counts)
+                rp, vp = _pad(r), _pad(v)
+                code = K.handle_event(P, L, ist, kind[k_ev], tgt[k_ev], rp, vp, float(cor), law,
+                                      float(window), alpha + beta * tau, *padded, Minv_fam,
+                                      v_rest, counts)
+                v = vp[:n].copy()
                 if code:
                     peaks[K.TR_RL if code == 1 else K.TR_RU] = 1.0
                     status = K.ST_COLLAPSED
                     collapse_time = t0 + tau
                     break
-                K.tracker_rows(P, L, ist[K.I_FAM], TR)
-                mode = _mode(P, ist, cache)
+                K.tracker_rows(P, L, ist[K.I_FAM], TRp)
+                mode, padded = _mode(P, ist, cache)
                 MK, MC, MR, MG = mode
                 val, _ = tracker_values(mode, r, v, alpha + beta * tau, beta)
                 bump(val)
                 ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-                e = sig[:ne] * (rows[:ne] @ r) + kap[:ne]
-                ed = sig[:ne] * (rows[:ne] @ v)
+                e = sig[:ne] * (rows[:ne, :n] @ r) + kap[:ne]
+                ed = sig[:ne] * (rows[:ne, :n] @ v)
                 now = np.flatnonzero((e <= 0.0) & (ed < 0.0))
                 k_ev = int(now[0]) if now.size else -1
         if status != K.ST_OK:
             duration = t0 + tau
             break
         if step == N - 2:
-            val, _ = tracker_values(_mode(P, ist, cache), r, v, 0.0, 0.0)
+            val, _ = tracker_values(_mode(P, ist, cache)[0], r, v, 0.0, 0.0)
             np.maximum(peaks[K.N_DISP:], np.abs(val[K.N_DISP:]), out=peaks[K.N_DISP:])
         if history:
             a_grid = ag[step + 1] if step + 1 < N else 0.0
-            val, _ = tracker_values(_mode(P, ist, cache), r, v, a_grid, 0.0)
-            K._record(hist, step + 1, L, ist, r, v, val, n)
+            val, _ = tracker_values(_mode(P, ist, cache)[0], r, v, a_grid, 0.0)
+            K._record(hist, step + 1, L, ist, _pad(r), _pad(v), val, n)
     if status == K.ST_COLLAPSED:
         peaks[K.TR_RL] = min(peaks[K.TR_RL], 1.0)
         peaks[K.TR_RU] = min(peaks[K.TR_RU], 1.0)

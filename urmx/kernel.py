@@ -399,13 +399,11 @@ def _norm_inf(A):
     return best
 
 
-@njit(cache=True, _nrt=False)
-def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
-    """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
-    r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays). Returns the number of
-    terms."""
+@njit(cache=True, _nrt=False, inline='always')
+def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
+    """:func:`_taylor` over the first nn coordinates (nn a constant where inlined)."""
     big = 0.0
-    for i in range(NP):
+    for i in range(nn):
         D[0, i] = r0[i]
         D[1, i] = v0[i] * h
         big = max(big, abs(D[0, i]), abs(D[1, i]))
@@ -414,9 +412,9 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
         c = h * h / ((j + 1.0) * (j + 2.0))
         q = (j + 1.0) / h
         mx = 0.0
-        for i in range(NP):
+        for i in range(nn):
             acc = 0.0
-            for k in range(NP):
+            for k in range(nn):
                 acc -= MK[i, k] * D[j, k] + q * MC[i, k] * D[j + 1, k]
             if j == 0:
                 acc -= MR[i] + MG[i] * a0
@@ -429,11 +427,27 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D):
         big = max(big, mx)
         if j >= 3:
             prev = 0.0
-            for i in range(NP):
+            for i in range(nn):
                 prev = max(prev, abs(D[j + 1, i]))
-            if (mx + prev) * (j + 2.0) ** 3 <= 1e-17 * big:
+            w = j + 2.0
+            if (mx + prev) * (w * w * w) <= 1e-17 * big:
                 break
     return m
+
+
+@njit(cache=True, _nrt=False)
+def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
+    """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
+    r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays; n reduced coordinates,
+    the padding columns of D stay zero). Returns the number of terms.
+
+    The loops are specialised to n = 1, 2, 3: this is the kernel's most-run arithmetic
+    (two series per event), and padded loops did 9 products per term where n = 2 needs 4."""
+    if n == 2:
+        return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 2)
+    if n == 3:
+        return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 3)
+    return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 1)
 
 
 @njit(cache=True, _nrt=False, inline='always')
@@ -513,6 +527,63 @@ def _solve(cf, m, lo, hi, deriv, tol, guess):
             xn = min(max(xn, a), b)
         x = xn
     return a, b
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _peval1(cf, m, s):
+    """Polynomial value and first derivative (Horner)."""
+    p = cf[m - 1]
+    dp = 0.0
+    for j in range(m - 2, -1, -1):
+        dp = dp * s + p
+        p = p * s + cf[j]
+    return p, dp
+
+
+@njit(cache=True, _nrt=False)
+def _root(cf, m, lo, hi, tol, guess):
+    """:func:`_solve` for an event function, positive at lo and not at hi: bracketed
+    Newton on the value and slope alone. Returns (a, b), f(a) > 0 >= f(b), b - a <= tol."""
+    a, b = lo, hi
+    x = guess if lo < guess < hi else 0.5 * (lo + hi)
+    for _ in range(100):
+        p, dp = _peval1(cf, m, x)
+        if p == 0.0:
+            return x, x
+        if p > 0.0:
+            a = x
+        else:
+            b = x
+        if b - a <= tol:
+            break
+        xn = x - p / dp if dp != 0.0 else 0.5 * (a + b)
+        if not (a < xn < b):
+            xn = 0.5 * (a + b)
+        if abs(xn - x) < 0.5 * tol:  # close the bracket from the other side
+            xn = x + 0.5 * tol if p > 0.0 else x - 0.5 * tol
+            xn = min(max(xn, a), b)
+        x = xn
+    return a, b
+
+
+@njit(cache=True, _nrt=False)
+def _hermite_root(p0, p1, m0, m1):
+    """A starting point for :func:`_root`: the root in (0, 1] of the cubic Hermite
+    interpolant of p0 > 0 >= p1 with end slopes m0, m1 (a few safeguarded Newton steps
+    from the secant point)."""
+    A = 2.0 * p0 + m0 - 2.0 * p1 + m1
+    B = -3.0 * p0 - 2.0 * m0 + 3.0 * p1 - m1
+    s = p0 / (p0 - p1)
+    for _ in range(3):
+        f = ((A * s + B) * s + m0) * s + p0
+        df = (3.0 * A * s + 2.0 * B) * s + m0
+        if df >= 0.0:
+            break
+        sn = s - f / df
+        if not (0.0 < sn <= 1.0):
+            break
+        s = sn
+    return s
 
 
 @njit(cache=True, _nrt=False, inline='always')
@@ -653,19 +724,19 @@ def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D)
         e[:] = 0.0
         e[i] = 1.0
         if col < NP:
-            m = _taylor(MK, MC, z, z, e, z, 0.0, 0.0, h, D)
+            m = _taylor(MK, MC, z, z, e, z, 0.0, 0.0, h, D, n)
         else:
-            m = _taylor(MK, MC, z, z, z, e, 0.0, 0.0, h, D)
+            m = _taylor(MK, MC, z, z, z, e, 0.0, 0.0, h, D, n)
         _sum_state(D, m, 1.0, h, r, v)
         prop[idx, :NP, col] = r
         prop[idx, NP:, col] = v
     for which in range(3):
         if which == 0:
-            m = _taylor(MK, MC, MR, z, z, z, 0.0, 0.0, h, D)
+            m = _taylor(MK, MC, MR, z, z, z, 0.0, 0.0, h, D, n)
         elif which == 1:
-            m = _taylor(MK, MC, z, MG, z, z, 1.0, 0.0, h, D)
+            m = _taylor(MK, MC, z, MG, z, z, 1.0, 0.0, h, D, n)
         else:
-            m = _taylor(MK, MC, z, MG, z, z, 0.0, 1.0, h, D)
+            m = _taylor(MK, MC, z, MG, z, z, 0.0, 1.0, h, D, n)
         _sum_state(D, m, 1.0, h, r, v)
         pvec[idx, which, :NP] = r
         pvec[idx, which, NP:] = v
@@ -887,7 +958,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                     rb[i] = s1
                     vb[i] = s2
             else:
-                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
                 _sum_state(D, m_taylor, 1.0, H, rb, vb)
             _events_at(rows, sig, kap, ne, rb, vb, e_b, ed_b)
             # earliest event on [tau, tb]
@@ -911,7 +982,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                 if not (crossing or dip or rebound):
                     continue
                 if m_taylor == 0:
-                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
                 mc = _scalar_poly(rows, k, D, m_taylor, False, H, 0.0, 0.0, sig[k], kap[k],
                                   cf)
                 s_lo = 0.0
@@ -933,7 +1004,11 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                         continue
                     s_hi = s_ev
                 tol = min(TIME_TOL / H, 1e-3)
-                lo_, hi_ = _solve(cf, mc, s_lo, s_hi, 0, tol, 0.5 * (s_lo + s_hi))
+                if crossing and s_hi == 1.0:
+                    guess = _hermite_root(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
+                else:
+                    guess = 0.5 * (s_lo + s_hi)
+                lo_, hi_ = _root(cf, mc, s_lo, s_hi, tol, guess)
                 s_root = hi_  # the side where the event function has crossed
                 if s_root < s_ev or k_ev < 0:
                     s_ev = s_root
@@ -943,7 +1018,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                 _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b, sacc,
                        sjerk)
                 m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, 1.0, m_taylor, D,
-                                       cf, MK, MC, MR, MG, r, v, a0, beta, H)
+                                       cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
                 if m_taylor:
                     n_series += 1
                 if ist[I_FAM] == 1:
@@ -964,7 +1039,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
             # ---- an event at tau + s_ev*H ----
             n_series += 1
             if m_taylor == 0:
-                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
             He = s_ev * H
             _sum_state(D, m_taylor, s_ev, H, rb, vb)
             te_loc = tau + He
@@ -973,7 +1048,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
             if He > 0.0:
                 # peaks on [tau, te], the one-sided values before the event included
                 _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_ev, m_taylor, D, cf, MK,
-                            MC, MR, MG, r, v, a0, beta, H)
+                            MC, MR, MG, r, v, a0, beta, H, n)
             if ist[I_FAM] == 1:
                 fam1_time += He
             tau = te_loc
@@ -1067,7 +1142,7 @@ def _record(hist, k, L, ist, r, v, val, n):
 
 @njit(cache=True, _nrt=False, inline='always')
 def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
-                MG, r, v, a0, beta, H):
+                MG, r, v, a0, beta, H, n):
     """Peak update over [0, s_end*H] of a sub-step of length H from the end values and
     rates; interior extrema that may beat the running peak are located on the exact
     series about the sub-step start (computed here if m_taylor is 0)."""
@@ -1088,7 +1163,7 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
         if est < peaks[t] * (1.0 - GATE):
             continue
         if m_taylor == 0:
-            m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D)
+            m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
         mc = _scalar_poly(TR, t, D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
         guess = s_end * (slo if abs(lo) >= abs(hi) else shi)
         lo_, hi_ = _solve(cf, mc, 0.0, s_end, 1, 1e-13, guess)

@@ -407,19 +407,31 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
         D[0, i] = r0[i]
         D[1, i] = v0[i] * h
         big = max(big, abs(D[0, i]), abs(D[1, i]))
-    m = 2
-    for j in range(KMAX - 2):
-        c = h * h / ((j + 1.0) * (j + 2.0))
+    # the forcing enters the first two terms only
+    hh = h * h
+    for i in range(nn):
+        acc = -(MR[i] + MG[i] * a0)
+        acc2 = -MG[i] * beta * h
+        for k in range(nn):
+            acc -= MK[i, k] * D[0, k] + (1.0 / h) * MC[i, k] * D[1, k]
+        D[2, i] = 0.5 * hh * acc
+        big = max(big, abs(D[2, i]))
+        D[3, i] = acc2  # completed below, once D[2] is known
+    for i in range(nn):
+        acc = D[3, i]
+        for k in range(nn):
+            acc -= MK[i, k] * D[1, k] + (2.0 / h) * MC[i, k] * D[2, k]
+        D[3, i] = (hh / 6.0) * acc
+        big = max(big, abs(D[3, i]))
+    m = 4
+    for j in range(2, KMAX - 2):
+        c = hh / ((j + 1.0) * (j + 2.0))
         q = (j + 1.0) / h
         mx = 0.0
         for i in range(nn):
             acc = 0.0
             for k in range(nn):
                 acc -= MK[i, k] * D[j, k] + q * MC[i, k] * D[j + 1, k]
-            if j == 0:
-                acc -= MR[i] + MG[i] * a0
-            elif j == 1:
-                acc -= MG[i] * beta * h
             val = c * acc
             D[j + 2, i] = val
             mx = max(mx, abs(val))
@@ -429,8 +441,9 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
             prev = 0.0
             for i in range(nn):
                 prev = max(prev, abs(D[j + 1, i]))
+            # the tail is below round-off in values, rates and accelerations
             w = j + 2.0
-            if (mx + prev) * (w * w * w) <= 1e-17 * big:
+            if (mx + prev) * (w * w) <= 1e-17 * big:
                 break
     return m
 

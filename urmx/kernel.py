@@ -9,7 +9,8 @@ time. Its solution is an entire function of time, so:
 * Each piece (family, lower branch, upper branch) gets a *mode*: ``M^-1 K``, ``M^-1 C``,
   ``M^-1 R0``, ``M^-1 G`` and the exact propagator over a sub-step ``h = dt/nsub``
   (state-transition matrix plus the responses to the constant, ramp and resistance
-  forcing), built once per wall and record step and cached.
+  forcing), built for all 50 pieces before the first step of a wall and record step
+  (about 3 ms) and cached for the next analysis of the same wall.
   ``nsub`` is the smallest integer with ``nu*h <= 1``, ``nu = sqrt(|M^-1 K|) + |M^-1 C|``
   bounding the piece's frequencies (1 for soft walls; a 1e9 N/m spring needs more).
 * Whole sub-steps are stepped by one matrix-vector product (exact to round-off).
@@ -21,6 +22,20 @@ time. Its solution is an entire function of time, so:
   and the roots of event functions, their times, and the states there are found on it
   by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
   The state at an event is the series summed at the event time, not an interpolant.
+
+Speed (measured on the benchmark wall, 592 events: 3.0 ms an analysis before these
+three, about 0.7-1.1 ms after, on a noisy 2-core host):
+
+* Arrays over the reduced coordinates are padded to NP = 3 (unused entries exactly zero),
+  so the small loops have constant trip counts the compiler unrolls; the Taylor series
+  loops are specialised to the true n (1, 2 or 3).
+* The integration loop (:func:`_march`) and every helper it calls are compiled with
+  ``_nrt=False``: numba's reference counting incremented and decremented every array
+  argument of every helper call (an atomic operation each), which cost more than the
+  arithmetic. Code compiled that way cannot allocate, so :func:`_integrate` allocates the
+  work arrays and builds the piece tables before the loop.
+* Event roots start from the root of the cubic Hermite interpolant of the exact end
+  values and rates (3.4 polynomial evaluations a root on average).
 
 Event semantics (contacts, the opening rule, impacts and their laws, merged impacts,
 branch changes, collapse) live in the small functions below and are shared with the

@@ -526,19 +526,18 @@ def _peval(cf, m, s):
 
 
 @njit(cache=True, _nrt=False)
-def _solve(cf, m, lo, hi, deriv, tol, guess):
-    """Bracketed Newton on f = poly (deriv=0) or poly' (deriv=1) over [lo, hi] where f
-    changes sign; stops on the bracket width. Returns (a, b): f(a) has the sign of
-    f(lo), f(b) that of f(hi), and |b - a| <= tol."""
-    p, dp, ddp = _peval(cf, m, lo)
-    flo = p if deriv == 0 else dp
+def _solve(cf, m, lo, hi, tol, guess):
+    """Bracketed Newton on f = poly' (an extremum of the polynomial) over [lo, hi] where
+    f changes sign; stops on the bracket width. Returns (a, b): f(a) has the sign of
+    f(lo), f(b) that of f(hi), and |b - a| <= tol. (Event roots use :func:`_root`.)"""
+    flo = _peval(cf, m, lo)[1]
     orient = 1.0 if flo < 0.0 else -1.0  # oriented f: negative at lo
     a, b = lo, hi
     x = guess if lo < guess < hi else 0.5 * (lo + hi)
     for _ in range(100):
         p, dp, ddp = _peval(cf, m, x)
-        f = orient * (p if deriv == 0 else dp)
-        df = orient * (dp if deriv == 0 else ddp)
+        f = orient * dp
+        df = orient * ddp
         if f == 0.0:
             return x, x
         if f < 0.0:
@@ -570,8 +569,9 @@ def _peval1(cf, m, s):
 
 @njit(cache=True, _nrt=False)
 def _root(cf, m, lo, hi, tol, guess):
-    """:func:`_solve` for an event function, positive at lo and not at hi: bracketed
-    Newton on the value and slope alone. Returns (a, b), f(a) > 0 >= f(b), b - a <= tol."""
+    """Bracketed Newton for an event function, positive at lo and not at hi, on the
+    value and slope alone (one polynomial evaluation of two chains per iteration).
+    Returns (a, b), f(a) > 0 >= f(b), b - a <= tol."""
     a, b = lo, hi
     x = guess if lo < guess < hi else 0.5 * (lo + hi)
     for _ in range(100):
@@ -634,7 +634,7 @@ def _positive_max(cf, m):
         s = i / ns
         d = _peval(cf, m, s)[1]
         if d_prev > 0.0 and d <= 0.0:
-            a, b = _solve(cf, m, s_prev, s, 1, 1e-14, 0.5 * (s_prev + s))
+            a, b = _solve(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s))
             sm = 0.5 * (a + b)
             return sm if _peval(cf, m, sm)[0] > 0.0 else -1.0
         d_prev, s_prev = d, s
@@ -649,7 +649,7 @@ def _first_nonpositive(cf, m, single_min):
     single_min: the Hermite test found one interior minimum; otherwise the interval is
     scanned at 16 points and every local minimum between them is located exactly."""
     if single_min:
-        a, b = _solve(cf, m, 0.0, 1.0, 1, 1e-14, 0.5)
+        a, b = _solve(cf, m, 0.0, 1.0, 1e-14, 0.5)
         s = 0.5 * (a + b)
         return s if _peval(cf, m, s)[0] <= 0.0 else 2.0
     ns = 16
@@ -661,7 +661,7 @@ def _first_nonpositive(cf, m, single_min):
         if p <= 0.0:
             return s
         if d_prev < 0.0 and d > 0.0:
-            a, b = _solve(cf, m, s_prev, s, 1, 1e-14, 0.5 * (s_prev + s))
+            a, b = _solve(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s))
             sm = 0.5 * (a + b)
             if _peval(cf, m, sm)[0] <= 0.0:
                 return sm
@@ -1194,7 +1194,7 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
             m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
         mc = _scalar_poly(TR, t, D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
         guess = s_end * (slo if abs(lo) >= abs(hi) else shi)
-        lo_, hi_ = _solve(cf, mc, 0.0, s_end, 1, 1e-13, guess)
+        lo_, hi_ = _solve(cf, mc, 0.0, s_end, 1e-13, guess)
         x = abs(_peval(cf, mc, 0.5 * (lo_ + hi_))[0])
         if x > peaks[t]:
             peaks[t] = x

@@ -78,6 +78,8 @@ from .model import (
 from .variables import INTEGER_SCALARS
 
 KMAX = 48  # most Taylor terms a sub-step may need
+_INV12 = np.array([1.0 / ((j + 1.0) * (j + 2.0)) for j in range(KMAX)])
+_INV2 = np.array([1.0 / (j + 2.0) for j in range(KMAX)])
 RHO = 1.0  # nu*h bound of a sub-step
 GATE = 0.05  # refine an interior extremum when the Hermite estimate is within 5 % of the peak
 TIME_TOL = 1e-12  # event time tolerance [s]
@@ -438,6 +440,8 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
             acc -= MK[i, k] * D[1, k] + (2.0 / h) * MC[i, k] * D[2, k]
         D[3, i] = (hh / 6.0) * acc
         big = max(big, abs(D[3, i]))
+    if nn == 2:
+        return _tail2(MK, MC, h, D, big)
     m = 4
     for j in range(2, KMAX - 2):
         c = hh / ((j + 1.0) * (j + 2.0))
@@ -460,6 +464,40 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
             w = j + 2.0
             if (mx + prev) * (w * w) <= 1e-17 * big:
                 break
+    return m
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _tail2(MK, MC, h, D, big):
+    """The terms D[4:] of :func:`_taylor_n` for two coordinates, with the matrices and
+    the last two terms in registers: the recurrence is a chain of dependent products,
+    so its speed is the latency of one term (D is only written)."""
+    k00, k01, k10, k11 = MK[0, 0], MK[0, 1], MK[1, 0], MK[1, 1]
+    c00, c01, c10, c11 = MC[0, 0], MC[0, 1], MC[1, 0], MC[1, 1]
+    a0, a1 = D[2, 0], D[2, 1]  # D[j]
+    b0, b1 = D[3, 0], D[3, 1]  # D[j + 1]
+    hh = h * h
+    m = 4
+    for j in range(2, KMAX - 2):
+        # D[j+2] = -h^2/((j+1)(j+2)) MK D[j] - h/(j+2) MC D[j+1]
+        c1 = -hh * _INV12[j]
+        c2 = -h * _INV2[j]
+        u0 = c1 * (k00 * a0 + k01 * a1)
+        u1 = c1 * (k10 * a0 + k11 * a1)
+        n0 = c2 * (c00 * b0 + c01 * b1) + u0
+        n1 = c2 * (c10 * b0 + c11 * b1) + u1
+        D[j + 2, 0] = n0
+        D[j + 2, 1] = n1
+        mx = max(abs(n0), abs(n1))
+        m = j + 3
+        big = max(big, mx)
+        if j >= 3:
+            prev = max(abs(b0), abs(b1))
+            w = j + 2.0
+            if (mx + prev) * (w * w) <= 1e-17 * big:
+                break
+        a0, a1 = b0, b1
+        b0, b1 = n0, n1
     return m
 
 
@@ -558,13 +596,20 @@ def _solve(cf, m, lo, hi, tol, guess):
 
 @njit(cache=True, _nrt=False, inline='always')
 def _peval1(cf, m, s):
-    """Polynomial value and first derivative (Horner)."""
-    p = cf[m - 1]
-    dp = 0.0
-    for j in range(m - 2, -1, -1):
-        dp = dp * s + p
-        p = p * s + cf[j]
-    return p, dp
+    """Polynomial value and first derivative, summed as even and odd parts in s^2
+    (four Horner chains of half the length: the evaluation is latency-bound)."""
+    u = s * s
+    top = (m - 1) // 2
+    e = cf[2 * top]
+    o = cf[2 * top + 1] if 2 * top + 1 < m else 0.0
+    de = 0.0
+    do = 0.0
+    for i in range(top - 1, -1, -1):
+        de = de * u + e
+        e = e * u + cf[2 * i]
+        do = do * u + o
+        o = o * u + cf[2 * i + 1]
+    return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 
 @njit(cache=True, _nrt=False)
@@ -772,41 +817,31 @@ def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D)
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _load_mode(mats, vecs, prop, pvec, mid, MK, MC, MR, MG, E, PV):
-    """Copy the cached tables of piece mid into the integrator's work arrays."""
-    for i in range(NP):
-        MR[i] = vecs[mid, 0, i]
-        MG[i] = vecs[mid, 1, i]
-        for k in range(NP):
-            MK[i, k] = mats[mid, 0, i, k]
-            MC[i, k] = mats[mid, 1, i, k]
-    for i in range(2 * NP):
-        for w in range(3):
-            PV[w, i] = pvec[mid, w, i]
-        for k in range(2 * NP):
-            E[i, k] = prop[mid, i, k]
+def _mode_tables(mats, vecs, prop, pvec, mid):
+    """Views of the cached tables of piece mid: M^-1 K, M^-1 C, M^-1 R0, M^-1 G, the
+    propagator E and its forcing responses."""
+    return mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], prop[mid], pvec[mid]
 
 
 # ---- the integrator ---------------------------------------------------------------------
 
 @njit(cache=True, _nrt=False, inline='always')
-def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
-    """Tracker values and rates at one instant (accelerations absolute); acc and jerk
-    are scratch arrays."""
-    for i in range(NP):
+def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
+    """:func:`_point` over the first nn coordinates (a constant where inlined)."""
+    for i in range(nn):
         s = -MR[i] - MG[i] * ag
-        for k in range(NP):
+        for k in range(nn):
             s -= MK[i, k] * r[k] + MC[i, k] * v[k]
         acc[i] = s
-    for i in range(NP):
+    for i in range(nn):
         s = -MG[i] * beta
-        for k in range(NP):
+        for k in range(nn):
             s -= MK[i, k] * v[k] + MC[i, k] * acc[k]
         jerk[i] = s
     for t in range(N_DISP):
         a = 0.0
         b = 0.0
-        for k in range(NP):
+        for k in range(nn):
             a += TR[t, k] * r[k]
             b += TR[t, k] * v[k]
         val[t] = a
@@ -814,7 +849,7 @@ def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
     for t in range(N_DISP, N_TRACK):
         a = 0.0
         b = 0.0
-        for k in range(NP):
+        for k in range(nn):
             a += TR[t, k] * acc[k]
             b += TR[t, k] * jerk[k]
         val[t] = a + ag
@@ -822,15 +857,89 @@ def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _events_at(rows, sig, kap, ne, r, v, e, ed):
-    for k in range(ne):
-        a = 0.0
-        b = 0.0
+def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
+    """Tracker values and rates at one instant (accelerations absolute); acc and jerk
+    are scratch arrays. Specialised to n = 1, 2, 3 like :func:`_taylor`."""
+    if n == 2:
+        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 2)
+    elif n == 3:
+        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 3)
+    else:
+        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 1)
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
+    for i in range(nn):
+        s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
+        s2 = PV[0, NP + i] + a0 * PV[1, NP + i] + beta * PV[2, NP + i]
+        for k in range(nn):
+            s1 += E[i, k] * r[k]
+            s2 += E[NP + i, k] * r[k]
+        for k in range(nn):
+            s1 += E[i, NP + k] * v[k]
+            s2 += E[NP + i, NP + k] * v[k]
+        rb[i] = s1
+        vb[i] = s2
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
+    """The state after a whole sub-step by the exact propagator (rb, vb must not be r, v)."""
+    if n == 2:
+        _propagate_n(E, PV, r, v, a0, beta, rb, vb, 2)
+    elif n == 3:
+        _propagate_n(E, PV, r, v, a0, beta, rb, vb, 3)
+    else:
+        _propagate_n(E, PV, r, v, a0, beta, rb, vb, 1)
+
+
+@njit(cache=True, _nrt=False)
+def _event_table(rows, sig, kap, kind, ne, RT, KP, OPN):
+    """The event functions of a piece as signed rows stored by column (RT[i, k] =
+    sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
+    functions (e = 1, rate 0) so that all are evaluated in fixed-length loops."""
+    for k in range(MAX_EV):
+        live = k < ne
         for i in range(NP):
-            a += rows[k, i] * r[i]
-            b += rows[k, i] * v[i]
-        e[k] = sig[k] * a + kap[k]
-        ed[k] = sig[k] * b
+            RT[i, k] = sig[k] * rows[k, i] if live else 0.0
+        KP[k] = kap[k] if live else 1.0
+        OPN[k] = 1.0 if live and (kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN) \
+            else 0.0
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _events_at_n(RT, KP, r, v, e, ed, nn):
+    for k in range(MAX_EV):
+        a = RT[0, k] * r[0]
+        b = RT[0, k] * v[0]
+        for i in range(1, nn):
+            a += RT[i, k] * r[i]
+            b += RT[i, k] * v[i]
+        e[k] = a + KP[k]
+        ed[k] = b
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _events_at(RT, KP, r, v, e, ed, n):
+    """Values and rates of all MAX_EV event functions at state (r, v)."""
+    if n == 2:
+        _events_at_n(RT, KP, r, v, e, ed, 2)
+    elif n == 3:
+        _events_at_n(RT, KP, r, v, e, ed, 3)
+    else:
+        _events_at_n(RT, KP, r, v, e, ed, 1)
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
+    """False when no event function can have an event on the sub-step: none ends at
+    or below zero, no closed contact may open, none dips towards zero."""
+    flag = False
+    for k in range(MAX_EV):
+        # (a superset: a rate turning upward is flagged whatever the values)
+        flag |= (e_b[k] <= 0.0) | (OPN[k] * e_a[k] > 0.0) | ((ed_a[k] < 0.0) & (ed_b[k] > 0.0))
+    return flag
 
 
 @njit(cache=True)
@@ -841,7 +950,7 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t, pattern, then r, v).
     Returns a status code."""
     L = watch_rows(P)
-    TR = np.zeros((N_TRACK, NP))
+    TRF = np.zeros((2, N_TRACK, NP))  # tracker rows of families 1 and 2
     D = np.zeros((KMAX, NP))
     cf = np.zeros(KMAX)
     ist = np.zeros(N_IST, np.int64)
@@ -854,6 +963,9 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     ed_a = np.zeros(MAX_EV)
     e_b = np.zeros(MAX_EV)
     ed_b = np.zeros(MAX_EV)
+    RT = np.zeros((NP, MAX_EV))
+    KP = np.zeros(MAX_EV)
+    OPN = np.zeros(MAX_EV)
     val_a = np.zeros(N_TRACK)
     der_a = np.zeros(N_TRACK)
     val_b = np.zeros(N_TRACK)
@@ -862,17 +974,12 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
     v = np.zeros(NP)
     rb = np.zeros(NP)
     vb = np.zeros(NP)
-    xa = np.zeros(2 * NP)
     sacc = np.zeros(NP)
     sjerk = np.zeros(NP)
-    MK = np.zeros((NP, NP))
-    MC = np.zeros((NP, NP))
-    MR = np.zeros(NP)
-    MG = np.zeros(NP)
-    E = np.zeros((2 * NP, 2 * NP))
-    PV = np.zeros((3, 2 * NP))
     Minv_fam = mass_inverses(P, law)
     counts = np.zeros(2, np.int64)  # base, crack impacts
+    tracker_rows(P, L, 1, TRF[0])
+    tracker_rows(P, L, 2, TRF[1])
     # every piece's tables, built once per wall and record step (_march cannot allocate)
     for fam in (1, 2):
         for bl in range(-2, 3):
@@ -881,24 +988,22 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                 if not ready[mid]:
                     _build_mode(P, fam, bl, bu, dt, mid, ready, nsub, mats, vecs, prop, pvec, D)
     return _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec,
-                  peaks, outs, hist, want_hist, evlog, L, TR, D, cf, ist, rows, kind, tgt,
-                  Minv_fam, counts, (sig, kap, e_a, ed_a, e_b, ed_b),
-                  (val_a, der_a, val_b, der_b), (r, v, rb, vb, xa, sacc, sjerk, MR, MG),
-                  (MK, MC, E, PV))
+                  peaks, outs, hist, want_hist, evlog, L, TRF, D, cf, ist, rows, kind, tgt,
+                  Minv_fam, counts, (sig, kap, e_a, ed_a, e_b, ed_b, RT, KP, OPN),
+                  (val_a, der_a, val_b, der_b), (r, v, rb, vb, sacc, sjerk))
 
 
 @njit(cache=True, _nrt=False)
 def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, peaks,
-           outs, hist, want_hist, evlog, L, TR, D, cf, ist, rows, kind, tgt, Minv_fam,
-           counts, evbuf, trbuf, vecbuf, matbuf):
+           outs, hist, want_hist, evlog, L, TRF, D, cf, ist, rows, kind, tgt, Minv_fam,
+           counts, evbuf, trbuf, vecbuf):
     """The integration loop of :func:`_integrate`, on the work arrays it allocated.
 
     Compiled without numba's reference counting (``_nrt=False``): it never allocates, and
     the counting of every array passed to every helper cost more than the arithmetic."""
-    sig, kap, e_a, ed_a, e_b, ed_b = evbuf
+    sig, kap, e_a, ed_a, e_b, ed_b, RT, KP, OPN = evbuf
     val_a, der_a, val_b, der_b = trbuf
-    r, v, rb, vb, xa, sacc, sjerk, MR, MG = vecbuf
-    MK, MC, E, PV = matbuf
+    r, v, rb, vb, sacc, sjerk = vecbuf
     n = n_dof(P)
     N = ag.shape[0]
     nsteps = N - 1 + ntail
@@ -928,14 +1033,15 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
     n_sub = 0
     n_series = 0
     t_end = nsteps * dt
-    tracker_rows(P, L, ist[I_FAM], TR)
+    TR = TRF[ist[I_FAM] - 1]
     mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
     ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-    _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
-    _load_mode(mats, vecs, prop, pvec, mid, MK, MC, MR, MG, E, PV)
+    _event_table(rows, sig, kap, kind, ne, RT, KP, OPN)
+    _events_at(RT, KP, r, v, e_a, ed_a, n)
+    MK, MC, MR, MG, E, PV = _mode_tables(mats, vecs, prop, pvec, mid)
     a_now = ag[0] if N > 0 else 0.0
     beta0 = (ag[1] - ag[0]) / dt if N > 1 else 0.0
-    _point(MK, MC, MR, MG, TR, r, v, a_now, beta0, val_a, der_a, sacc, sjerk)
+    _point(MK, MC, MR, MG, TR, r, v, a_now, beta0, val_a, der_a, sacc, sjerk, n)
     for t in range(N_TRACK):
         peaks[t] = max(peaks[t], abs(val_a[t]))
     if want_hist:
@@ -962,10 +1068,14 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
         beta_prev = beta
         while True:
             ns = nsub[mid]
-            h_sub = dt / ns
-            # end of this sub-step: the next multiple of h_sub (the step end at most)
-            j = int(math.floor(tau / h_sub + 1e-9)) + 1
-            tb = dt if j >= ns else j * h_sub
+            h_sub = dt
+            tb = dt
+            if ns > 1:
+                h_sub = dt / ns
+                # end of this sub-step: the next multiple of h_sub (the step end at most)
+                j = int(math.floor(tau / h_sub + 1e-9)) + 1
+                if j < ns:
+                    tb = j * h_sub
             H = tb - tau
             if H <= 1e-15 * dt:
                 break
@@ -974,25 +1084,15 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
             full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
             m_taylor = 0
             if full:
-                for i in range(NP):
-                    xa[i] = r[i]
-                    xa[NP + i] = v[i]
-                for i in range(NP):
-                    s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
-                    s2 = PV[0, NP + i] + a0 * PV[1, NP + i] + beta * PV[2, NP + i]
-                    for k in range(2 * NP):
-                        s1 += E[i, k] * xa[k]
-                        s2 += E[NP + i, k] * xa[k]
-                    rb[i] = s1
-                    vb[i] = s2
+                _propagate(E, PV, r, v, a0, beta, rb, vb, n)
             else:
                 m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
                 _sum_state(D, m_taylor, 1.0, H, rb, vb)
-            _events_at(rows, sig, kap, ne, rb, vb, e_b, ed_b)
+            _events_at(RT, KP, rb, vb, e_b, ed_b, n)
             # earliest event on [tau, tb]
             s_ev = 2.0
             k_ev = -1
-            for k in range(ne):
+            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b) else 0):
                 opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
                 crossing = e_a[k] > 0.0 and e_b[k] <= 0.0
                 # started on (or just behind) zero moving inward, and ends at or behind
@@ -1004,7 +1104,9 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                     # sub-step, with zero rate at the start (at rest): scan the series
                     dip = not crossing and e_a[k] > 0.0
                 elif not crossing and e_a[k] > 0.0 and e_b[k] > 0.0 and ed_a[k] < 0.0 \
-                        and ed_b[k] > 0.0:
+                        and ed_b[k] > 0.0 and min(e_a[k], e_b[k]) - (4.0 / 27.0) * H * (
+                            ed_b[k] - ed_a[k]) < 0.25 * max(e_a[k], e_b[k]):
+                    # (the Hermite cubic stays above min(ends) - 4/27 (|m0| + |m1|))
                     lo, hi, slo, shi = _hermite_ext(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
                     dip = lo < 0.25 * max(e_a[k], e_b[k])
                 if not (crossing or dip or rebound):
@@ -1031,7 +1133,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                     if _peval(cf, mc, s_ev)[0] > 0.0:
                         continue
                     s_hi = s_ev
-                tol = min(TIME_TOL / H, 1e-3)
+                tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
                 if crossing and s_hi == 1.0:
                     guess = _hermite_root(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
                 else:
@@ -1044,7 +1146,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
             if k_ev < 0:
                 # no event: peaks over the sub-step, then advance
                 _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b, sacc,
-                       sjerk)
+                       sjerk, n)
                 m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, 1.0, m_taylor, D,
                                        cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
                 if m_taylor:
@@ -1058,7 +1160,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                 for t in range(N_TRACK):
                     val_a[t] = val_b[t]
                     der_a[t] = der_b[t]
-                for k in range(ne):
+                for k in range(MAX_EV):
                     e_a[k] = e_b[k]
                     ed_a[k] = ed_b[k]
                 if tb >= dt:
@@ -1072,7 +1174,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
             _sum_state(D, m_taylor, s_ev, H, rb, vb)
             te_loc = tau + He
             _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b, sacc,
-                   sjerk)
+                   sjerk, n)
             if He > 0.0:
                 # peaks on [tau, te], the one-sided values before the event included
                 _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_ev, m_taylor, D, cf, MK,
@@ -1106,15 +1208,16 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
                     status = ST_COLLAPSED
                     break
                 # new piece
-                tracker_rows(P, L, ist[I_FAM], TR)
+                TR = TRF[ist[I_FAM] - 1]
                 mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
                 ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-                _load_mode(mats, vecs, prop, pvec, mid, MK, MC, MR, MG, E, PV)
+                _event_table(rows, sig, kap, kind, ne, RT, KP, OPN)
+                MK, MC, MR, MG, E, PV = _mode_tables(mats, vecs, prop, pvec, mid)
                 _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc,
-                       sjerk)
+                       sjerk, n)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
-                _events_at(rows, sig, kap, ne, r, v, e_a, ed_a)
+                _events_at(RT, KP, r, v, e_a, ed_a, n)
                 # a boundary reached at the same instant and moving outward fires now
                 k_ev = -1
                 for k in range(ne):
@@ -1131,13 +1234,13 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
             break
         if step == N - 2:
             # the record ends: the right-hand limit of the absolute accelerations (xg_dd = 0)
-            _point(MK, MC, MR, MG, TR, r, v, 0.0, 0.0, val_b, der_b, sacc, sjerk)
+            _point(MK, MC, MR, MG, TR, r, v, 0.0, 0.0, val_b, der_b, sacc, sjerk, n)
             for t in range(N_DISP, N_TRACK):
                 peaks[t] = max(peaks[t], abs(val_b[t]))
         if want_hist:
             a_grid = ag[step + 1] if step + 1 < N else 0.0
             b_grid = 0.0
-            _point(MK, MC, MR, MG, TR, r, v, a_grid, b_grid, val_b, der_b, sacc, sjerk)
+            _point(MK, MC, MR, MG, TR, r, v, a_grid, b_grid, val_b, der_b, sacc, sjerk, n)
             _record(hist, step + 1, L, ist, r, v, val_b, n)
     if status == ST_COLLAPSED:
         peaks[TR_RL] = min(peaks[TR_RL], 1.0)

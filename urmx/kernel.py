@@ -75,7 +75,6 @@ from .model import (
     system,
     transform,
 )
-from .variables import INTEGER_SCALARS
 
 KMAX = 48  # most Taylor terms a sub-step may need
 _INV12 = np.array([1.0 / ((j + 1.0) * (j + 2.0)) for j in range(KMAX)])
@@ -469,35 +468,62 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
 
 @njit(cache=True, _nrt=False, inline='always')
 def _tail2(MK, MC, h, D, big):
-    """The terms D[4:] of :func:`_taylor_n` for two coordinates, with the matrices and
-    the last two terms in registers: the recurrence is a chain of dependent products,
-    so its speed is the latency of one term (D is only written)."""
+    """The terms D[4:] of :func:`_taylor_n` for two coordinates, two terms a pass.
+
+    The recurrence D[j+2] = c1_j MK D[j] + c2_j MC D[j+1] (c1_j = -h^2/((j+1)(j+2)),
+    c2_j = -h/(j+2)) is a chain of dependent products, so its speed is its latency.
+    Substituting it into the next term gives D[j+3] = c1_{j+1} MK D[j+1]
+    + c2_{j+1} c2_j MC^2 D[j+1] + c2_{j+1} c1_j MC MK D[j]: both new terms come from
+    the two before them, which halves the chain. Matrices and the last two terms stay
+    in registers (D is only written); the stopping test is that of :func:`_taylor_n`,
+    applied to each term in turn."""
     k00, k01, k10, k11 = MK[0, 0], MK[0, 1], MK[1, 0], MK[1, 1]
     c00, c01, c10, c11 = MC[0, 0], MC[0, 1], MC[1, 0], MC[1, 1]
+    # MC^2 and MC MK
+    q00 = c00 * c00 + c01 * c10
+    q01 = c00 * c01 + c01 * c11
+    q10 = c10 * c00 + c11 * c10
+    q11 = c10 * c01 + c11 * c11
+    p00 = c00 * k00 + c01 * k10
+    p01 = c00 * k01 + c01 * k11
+    p10 = c10 * k00 + c11 * k10
+    p11 = c10 * k01 + c11 * k11
     a0, a1 = D[2, 0], D[2, 1]  # D[j]
     b0, b1 = D[3, 0], D[3, 1]  # D[j + 1]
     hh = h * h
     m = 4
-    for j in range(2, KMAX - 2):
-        # D[j+2] = -h^2/((j+1)(j+2)) MK D[j] - h/(j+2) MC D[j+1]
+    for j in range(2, KMAX - 3, 2):
         c1 = -hh * _INV12[j]
         c2 = -h * _INV2[j]
-        u0 = c1 * (k00 * a0 + k01 * a1)
-        u1 = c1 * (k10 * a0 + k11 * a1)
-        n0 = c2 * (c00 * b0 + c01 * b1) + u0
-        n1 = c2 * (c10 * b0 + c11 * b1) + u1
+        d1 = -hh * _INV12[j + 1]  # c1_{j+1}
+        e2 = -h * _INV2[j + 1]  # c2_{j+1}
+        bb = e2 * c2
+        gg = e2 * c1
+        n0 = c2 * (c00 * b0 + c01 * b1) + c1 * (k00 * a0 + k01 * a1)
+        n1 = c2 * (c10 * b0 + c11 * b1) + c1 * (k10 * a0 + k11 * a1)
+        o0 = (d1 * (k00 * b0 + k01 * b1) + gg * (p00 * a0 + p01 * a1)) \
+            + bb * (q00 * b0 + q01 * b1)
+        o1 = (d1 * (k10 * b0 + k11 * b1) + gg * (p10 * a0 + p11 * a1)) \
+            + bb * (q10 * b0 + q11 * b1)
         D[j + 2, 0] = n0
         D[j + 2, 1] = n1
         mx = max(abs(n0), abs(n1))
         m = j + 3
         big = max(big, mx)
         if j >= 3:
-            prev = max(abs(b0), abs(b1))
             w = j + 2.0
-            if (mx + prev) * (w * w) <= 1e-17 * big:
+            if (mx + max(abs(b0), abs(b1))) * (w * w) <= 1e-17 * big:
                 break
-        a0, a1 = b0, b1
-        b0, b1 = n0, n1
+        D[j + 3, 0] = o0
+        D[j + 3, 1] = o1
+        mo = max(abs(o0), abs(o1))
+        m = j + 4
+        big = max(big, mo)
+        w = j + 3.0
+        if (mo + mx) * (w * w) <= 1e-17 * big:
+            break
+        a0, a1 = n0, n1
+        b0, b1 = o0, o1
     return m
 
 
@@ -519,6 +545,16 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
 @njit(cache=True, _nrt=False, inline='always')
 def _sum_state(D, m, s, h, r, v):
     """r(s h) and r_d(s h) from the Taylor coefficients."""
+    if s == 1.0:  # the same sums without the products by 1 (half the latency)
+        for i in range(NP):
+            p = D[m - 1, i]
+            dp = 0.0
+            for j in range(m - 2, -1, -1):
+                dp = dp + p
+                p = p + D[j, i]
+            r[i] = p
+            v[i] = dp / h
+        return
     for i in range(NP):
         p = D[m - 1, i]
         dp = 0.0
@@ -647,7 +683,7 @@ def _hermite_root(p0, p1, m0, m1):
     A = 2.0 * p0 + m0 - 2.0 * p1 + m1
     B = -3.0 * p0 - 2.0 * m0 + 3.0 * p1 - m1
     s = p0 / (p0 - p1)
-    for _ in range(3):
+    for _ in range(2):
         f = ((A * s + B) * s + m0) * s + p0
         df = (3.0 * A * s + 2.0 * B) * s + m0
         if df >= 0.0:
@@ -1355,8 +1391,8 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
     if ag.ndim != 1 or ag.size < 2:
         raise ValueError(f"ground_acceleration must be a 1-D array of at least 2 samples "
                          f"(got shape {ag.shape})")
-    bad = ~np.isfinite(ag)
-    if bad.any():
+    if not np.isfinite(ag).all():
+        bad = ~np.isfinite(ag)
         i = int(np.flatnonzero(bad)[0])
         raise ValueError(f"ground_acceleration has {int(bad.sum())} NaN/inf sample(s), the "
                          f"first at index {i} (t = {i * dt:g} s)")
@@ -1390,32 +1426,32 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
 
 def _scalars(peaks, outs, status):
     """The result dict of one analysis (shared by both solvers)."""
-    duration = outs[O_DURATION]
+    pk = peaks.tolist()  # Python floats in one call (this runs once per analysis)
+    out = outs.tolist()
+    duration = out[O_DURATION]
     res = {
-        "peak_crack_displacement": float(peaks[TR_UC]),
-        "peak_top_displacement": float(peaks[TR_UT]),
-        "peak_base_displacement": float(peaks[TR_UB]),
-        "peak_lower_drift": float(peaks[TR_D1]),
-        "peak_upper_drift": float(peaks[TR_D2]),
-        "peak_top_acceleration": float(peaks[TR_AT]),
-        "peak_crack_acceleration": float(peaks[TR_AC]),
-        "peak_base_acceleration": float(peaks[TR_AB]),
-        "instability_ratio_lower": float(peaks[TR_RL]),
-        "instability_ratio_upper": float(peaks[TR_RU]),
-        "instability_ratio": float(max(peaks[TR_RL], peaks[TR_RU])),
+        "peak_crack_displacement": pk[TR_UC],
+        "peak_top_displacement": pk[TR_UT],
+        "peak_base_displacement": pk[TR_UB],
+        "peak_lower_drift": pk[TR_D1],
+        "peak_upper_drift": pk[TR_D2],
+        "peak_top_acceleration": pk[TR_AT],
+        "peak_crack_acceleration": pk[TR_AC],
+        "peak_base_acceleration": pk[TR_AB],
+        "instability_ratio_lower": pk[TR_RL],
+        "instability_ratio_upper": pk[TR_RU],
+        "instability_ratio": max(pk[TR_RL], pk[TR_RU]),
         "collapsed": int(status == ST_COLLAPSED),
-        "collapse_time": float(outs[O_COLLAPSE_T]),
-        "unfavourable_fraction": float(outs[O_FAM1_TIME] / duration) if duration > 0 else 0.0,
-        "base_impacts": int(outs[O_BASE_IMP]),
-        "crack_impacts": int(outs[O_CRACK_IMP]),
+        "collapse_time": out[O_COLLAPSE_T],
+        "unfavourable_fraction": out[O_FAM1_TIME] / duration if duration > 0 else 0.0,
+        "base_impacts": int(out[O_BASE_IMP]),
+        "crack_impacts": int(out[O_CRACK_IMP]),
+        "status": STATUS[status],
+        "duration": duration,
+        "events": int(out[O_EVENTS]),
+        "substeps": int(out[O_SUBSTEPS]),
+        "series": int(out[O_SERIES]),
     }
-    for name in INTEGER_SCALARS:
-        res[name] = int(res[name])
-    res["status"] = STATUS[status]
-    res["duration"] = float(duration)
-    res["events"] = int(outs[O_EVENTS])
-    res["substeps"] = int(outs[O_SUBSTEPS])
-    res["series"] = int(outs[O_SERIES])
     return res
 
 

@@ -549,7 +549,8 @@ def _sum_state(D, m, s, h, r, v):
         for i in range(NP):
             p = D[m - 1, i]
             dp = 0.0
-            for j in range(m - 2, -1, -1):
+            for k in range(m - 1):  # j = m - 2 - k, unsigned: no negative-index handling
+                j = np.uint64(m - 2 - k)
                 dp = dp + p
                 p = p + D[j, i]
             r[i] = p
@@ -640,11 +641,12 @@ def _peval1(cf, m, s):
     o = cf[2 * top + 1] if 2 * top + 1 < m else 0.0
     de = 0.0
     do = 0.0
-    for i in range(top - 1, -1, -1):
+    for k in range(top):  # i = top - 1 - k, unsigned: no negative-index handling
+        i = np.uint64(2 * (top - 1 - k))
         de = de * u + e
-        e = e * u + cf[2 * i]
+        e = e * u + cf[i]
         do = do * u + o
-        o = o * u + cf[2 * i + 1]
+        o = o * u + cf[i + np.uint64(1)]
     return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 

@@ -559,7 +559,8 @@ def _sum_state(D, m, s, h, r, v):
     for i in range(NP):
         p = D[m - 1, i]
         dp = 0.0
-        for j in range(m - 2, -1, -1):
+        for k in range(m - 1):
+            j = np.uint64(m - 2 - k)
             dp = dp * s + p
             p = p * s + D[j, i]
         r[i] = p
@@ -593,7 +594,8 @@ def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
     ddp = 0.0
-    for j in range(m - 2, -1, -1):
+    for k in range(m - 1):
+        j = np.uint64(m - 2 - k)
         ddp = ddp * s + dp
         dp = dp * s + p
         p = p * s + cf[j]

@@ -23,19 +23,26 @@ time. Its solution is an entire function of time, so:
   by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
   The state at an event is the series summed at the event time, not an interpolant.
 
-Speed (measured on the benchmark wall, 592 events: 3.0 ms an analysis before these
-three, about 0.7-1.1 ms after, on a noisy 2-core host):
+Speed (measured on the benchmark wall, 592 events, 2688 steps: 3.0 ms an analysis at
+first, about 0.5 ms now on a quiet moment of a noisy 2-core host). What paid, largest first:
 
-* Arrays over the reduced coordinates are padded to NP = 3 (unused entries exactly zero),
-  so the small loops have constant trip counts the compiler unrolls; the Taylor series
-  loops are specialised to the true n (1, 2 or 3).
 * The integration loop (:func:`_march`) and every helper it calls are compiled with
   ``_nrt=False``: numba's reference counting incremented and decremented every array
   argument of every helper call (an atomic operation each), which cost more than the
   arithmetic. Code compiled that way cannot allocate, so :func:`_integrate` allocates the
-  work arrays and builds the piece tables before the loop.
+  work arrays and builds the piece tables before the loop; the loop takes views of them.
+* Arrays over the reduced coordinates are padded to NP = 3 (unused entries exactly zero),
+  so the small loops have constant trip counts the compiler unrolls; the propagation, the
+  event functions, the trackers and the Taylor series are further specialised to the
+  true n (1, 2 or 3), which removes the padded products (about 9 % of the run for n=2).
 * Event roots start from the root of the cubic Hermite interpolant of the exact end
-  values and rates (3.4 polynomial evaluations a root on average).
+  values and rates and use Newton on value and slope, evaluated as even and odd parts in
+  s^2 (two Horner chains of half the length each): about 3.4 evaluations a root.
+* The Taylor recurrence is a chain of dependent products, so its cost is its latency:
+  for n = 2 the matrices and last terms are kept in registers and two terms are computed
+  a pass from the two before them (see :func:`_tail2`).
+* Small things the profile (perf with a JIT symbol map) showed: a division chain per
+  sub-step, signed-index handling in descending loops, copying piece tables.
 
 Event semantics (contacts, the opening rule, impacts and their laws, merged impacts,
 branch changes, collapse) live in the small functions below and are shared with the

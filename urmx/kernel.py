@@ -185,7 +185,7 @@ def tracker_rows(P, L, fam, out):
         out[TR_AT, k] = L[ROW_UT, k]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def mode_index(fam, bl, bu):
     return (fam - 1) * 25 + (bl + 2) * 5 + (bu + 2)
 
@@ -941,7 +941,7 @@ def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
         _propagate_n(E, PV, r, v, a0, beta, rb, vb, 1)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def _event_table(rows, sig, kap, kind, ne, RT, KP, OPN):
     """The event functions of a piece as signed rows stored by column (RT[i, k] =
     sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
@@ -1466,6 +1466,10 @@ def _scalars(peaks, outs, status):
     return res
 
 
+_NO_HIST = np.full((1, 9 + 2 * NP), np.nan)
+_NO_LOG = np.zeros((0, 3))
+
+
 def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: float = 0.8,
         impact: str = "scale", tail: float = 0.0, window: float = WINDOW,
         history: bool = False, max_log: int = 0) -> dict:
@@ -1506,9 +1510,9 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
     ready, nsub, mats, vecs, prop, pvec = _tables(wall, dt)
     peaks = np.zeros(N_TRACK)
     outs = np.zeros(N_OUT)
-    nh = N + ntail if history else 1
-    hist = np.full((nh, 9 + 2 * n), np.nan)
-    evlog = np.zeros((max_log, 3))
+    # without history or a log the kernel never writes them: shared placeholders
+    hist = np.full((N + ntail, 9 + 2 * n), np.nan) if history else _NO_HIST
+    evlog = np.zeros((max_log, 3)) if max_log else _NO_LOG
     status = _integrate(P, ag, dt, ntail, float(cor), law, float(window), ready, nsub, mats,
                         vecs, prop, pvec, peaks, outs, hist, bool(history), evlog)
     res = _scalars(peaks, outs, status)

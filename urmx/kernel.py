@@ -37,7 +37,7 @@ first, about 0.5 ms now on a quiet moment of a noisy 2-core host). What paid, la
   true n (1, 2 or 3), which removes the padded products (about 9 % of the run for n=2).
 * Event roots start from the root of the cubic Hermite interpolant of the exact end
   values and rates and use Newton on value and slope, evaluated as even and odd parts in
-  s^2 (two Horner chains of half the length each): about 3.4 evaluations a root.
+  s^2 (four Horner chains of half the length): about 3.4 evaluations a root.
 * The Taylor recurrence is a chain of dependent products, so its cost is its latency:
   for n = 2 the matrices and last terms are kept in registers and two terms are computed
   a pass from the two before them (see :func:`_tail2`).

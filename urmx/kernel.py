@@ -41,6 +41,9 @@ first, about 0.5 ms now on a quiet moment of a noisy 2-core host). What paid, la
 * The Taylor recurrence is a chain of dependent products, so its cost is its latency:
   for n = 2 the matrices and last terms are kept in registers and two terms are computed
   a pass from the two before them (see :func:`_tail2`).
+* ``error_model="numpy"`` on the loop's functions: numba's default tests every float
+  division for a zero divisor to raise ZeroDivisionError (a compare and branch each);
+  the kernel guards its divisions itself, and results are bitwise the same (about 2 %).
 * Small things the profile (perf with a JIT symbol map) showed: a division chain per
   sub-step, signed-index handling in descending loops, copying piece tables.
 
@@ -124,7 +127,7 @@ N_OUT = 8
 
 # ---- shared event semantics -----------------------------------------------------------
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _dot(a, b):
     """Dot product of two padded vectors (no BLAS: numba's np.dot calls it, costly here)."""
     out = 0.0
@@ -133,7 +136,7 @@ def _dot(a, b):
     return out
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _rowdot(A, i, x):
     """Row i of a padded matrix times a padded vector (no array view is created)."""
     out = 0.0
@@ -142,7 +145,7 @@ def _rowdot(A, i, x):
     return out
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _copy_row(src, i, dst, k):
     for j in range(NP):
         dst[k, j] = src[i, j]
@@ -166,7 +169,7 @@ def watch_rows(P):
     return L
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def tracker_rows(P, L, fam, out):
     """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
     a1, a2 = P[P_A1], P[P_A2]
@@ -185,12 +188,12 @@ def tracker_rows(P, L, fam, out):
         out[TR_AT, k] = L[ROW_UT, k]
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def mode_index(fam, bl, bu):
     return (fam - 1) * 25 + (bl + 2) * 5 + (bu + 2)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, sig, kap, kind,
                    tgt):
     """Event functions e = sig*(L[lrow].r) + kap (event when e falls through 0) bounding
@@ -223,7 +226,7 @@ def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, sig
     return k
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
     """The event functions of the current piece; returns how many."""
     k = 0
@@ -255,7 +258,7 @@ def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
     return k
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def set_family(P, ist, r, v, L):
     """Family from the pivot sides; a family change reclassifies the lower branch.
     Returns True when |theta1| is at or beyond the new case's theta0 (immediate collapse)."""
@@ -282,7 +285,7 @@ def mass_inverses(P, law):
     return out
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _quad(Minv, f, L, i, j):
     """L[i] . Minv[f] . L[j] over padded coordinates."""
     out = 0.0
@@ -294,7 +297,7 @@ def _quad(Minv, f, L, i, j):
     return out
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def impact_velocity(L, v, base, crack, cor, law, Minv, f):
     """Velocity jump of an impact in padded reduced coordinates.
 
@@ -334,7 +337,7 @@ def impact_velocity(L, v, base, crack, cor, law, Minv, f):
         v[i] += s
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, MR, MG,
                  Minv_fam, v_rest, counts):
     """Carry out one event at the current state (shared by both solvers; padded arrays).
@@ -397,7 +400,7 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
     return 1 if set_family(P, ist, r, v, L) else 0
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
     """Relative acceleration of the quantity of row L[lrow] (padded arrays)."""
     out = 0.0
@@ -411,7 +414,7 @@ def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
 
 # ---- numerics: modes, Taylor series, scalar polynomials -------------------------------
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _norm_inf(A):
     best = 0.0
     for i in range(A.shape[0]):
@@ -422,7 +425,7 @@ def _norm_inf(A):
     return best
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
     """:func:`_taylor` over the first nn coordinates (nn a constant where inlined)."""
     big = 0.0
@@ -473,7 +476,7 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
     return m
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _tail2(MK, MC, h, D, big):
     """The terms D[4:] of :func:`_taylor_n` for two coordinates, two terms a pass.
 
@@ -534,7 +537,7 @@ def _tail2(MK, MC, h, D, big):
     return m
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
     r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays; n reduced coordinates,
@@ -549,7 +552,7 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 1)
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _sum_state(D, m, s, h, r, v):
     """r(s h) and r_d(s h) from the Taylor coefficients."""
     if s == 1.0:  # the same sums without the products by 1 (half the latency)
@@ -574,7 +577,7 @@ def _sum_state(D, m, s, h, r, v):
         v[i] = dp / h
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of sig*row.r + kap (displacement kind) or of
     row.r_dd + xg_dd (acceleration kind), row = R[ri]. Returns their number."""
@@ -596,7 +599,7 @@ def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     return m - 2
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
@@ -609,7 +612,7 @@ def _peval(cf, m, s):
     return p, dp, 2.0 * ddp
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _solve(cf, m, lo, hi, tol, guess):
     """Bracketed Newton on f = poly' (an extremum of the polynomial) over [lo, hi] where
     f changes sign; stops on the bracket width. Returns (a, b): f(a) has the sign of
@@ -640,7 +643,7 @@ def _solve(cf, m, lo, hi, tol, guess):
     return a, b
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _peval1(cf, m, s):
     """Polynomial value and first derivative, summed as even and odd parts in s^2
     (four Horner chains of half the length: the evaluation is latency-bound)."""
@@ -659,7 +662,7 @@ def _peval1(cf, m, s):
     return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _root(cf, m, lo, hi, tol, guess):
     """Bracketed Newton for an event function, positive at lo and not at hi, on the
     value and slope alone (one polynomial evaluation of two chains per iteration).
@@ -686,7 +689,7 @@ def _root(cf, m, lo, hi, tol, guess):
     return a, b
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _hermite_root(p0, p1, m0, m1):
     """A starting point for :func:`_root`: the root in (0, 1] of the cubic Hermite
     interpolant of p0 > 0 >= p1 with end slopes m0, m1 (a few safeguarded Newton steps
@@ -706,7 +709,7 @@ def _hermite_root(p0, p1, m0, m1):
     return s
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _lower_bound(cf, m):
     """A rigorous lower bound of the polynomial on [0, 1]: c0 - sum_j>=1 |c_j|."""
     out = cf[0]
@@ -715,7 +718,7 @@ def _lower_bound(cf, m):
     return out
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _positive_max(cf, m):
     """For a polynomial starting at or below zero with a positive slope and ending at or
     below zero: the point of its first maximum if that maximum is positive, else -1."""
@@ -733,7 +736,7 @@ def _positive_max(cf, m):
     return -1.0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _first_nonpositive(cf, m, single_min):
     """A point s in (0, 1] where the polynomial (positive at 0) is <= 0, at or before
     its first interior minimum that reaches zero; 2.0 when it stays positive.
@@ -761,7 +764,7 @@ def _first_nonpositive(cf, m, single_min):
     return 2.0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _hermite_ext(p0, p1, m0, m1):
     """Interior extrema of the cubic Hermite interpolant on [0, 1]: (min, max, s_min,
     s_max); +inf/-inf when none."""
@@ -863,7 +866,7 @@ def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D)
     ready[idx] = True
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _mode_tables(mats, vecs, prop, pvec, mid):
     """Views of the cached tables of piece mid: M^-1 K, M^-1 C, M^-1 R0, M^-1 G, the
     propagator E and its forcing responses."""
@@ -872,7 +875,7 @@ def _mode_tables(mats, vecs, prop, pvec, mid):
 
 # ---- the integrator ---------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
     """:func:`_point` over the first nn coordinates (a constant where inlined)."""
     for i in range(nn):
@@ -903,7 +906,7 @@ def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
         der[t] = b + beta
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
     """Tracker values and rates at one instant (accelerations absolute); acc and jerk
     are scratch arrays. Specialised to n = 1, 2, 3 like :func:`_taylor`."""
@@ -915,7 +918,7 @@ def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
         _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 1)
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
     for i in range(nn):
         s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
@@ -930,7 +933,7 @@ def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
         vb[i] = s2
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
     """The state after a whole sub-step by the exact propagator (rb, vb must not be r, v)."""
     if n == 2:
@@ -941,7 +944,7 @@ def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
         _propagate_n(E, PV, r, v, a0, beta, rb, vb, 1)
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _event_table(rows, sig, kap, kind, ne, RT, KP, OPN):
     """The event functions of a piece as signed rows stored by column (RT[i, k] =
     sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
@@ -955,7 +958,7 @@ def _event_table(rows, sig, kap, kind, ne, RT, KP, OPN):
             else 0.0
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _events_at_n(RT, KP, r, v, e, ed, nn):
     for k in range(MAX_EV):
         a = RT[0, k] * r[0]
@@ -967,7 +970,7 @@ def _events_at_n(RT, KP, r, v, e, ed, nn):
         ed[k] = b
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _events_at(RT, KP, r, v, e, ed, n):
     """Values and rates of all MAX_EV event functions at state (r, v)."""
     if n == 2:
@@ -978,7 +981,7 @@ def _events_at(RT, KP, r, v, e, ed, n):
         _events_at_n(RT, KP, r, v, e, ed, 1)
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
     """False when no event function can have an event on the sub-step: none ends at
     or below zero, no closed contact may open, none dips towards zero."""
@@ -1040,7 +1043,7 @@ def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop
                   (val_a, der_a, val_b, der_b), (r, v, rb, vb, sacc, sjerk))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, peaks,
            outs, hist, want_hist, evlog, L, TRF, D, cf, ist, rows, kind, tgt, Minv_fam,
            counts, evbuf, trbuf, vecbuf):
@@ -1302,7 +1305,7 @@ def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, pea
     return status
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _record(hist, k, L, ist, r, v, val, n):
     hist[k, 0] = _rowdot(L, ROW_T1, r)
     hist[k, 1] = _rowdot(L, ROW_T2, r)
@@ -1318,7 +1321,7 @@ def _record(hist, k, L, ist, r, v, val, n):
         hist[k, 9 + n + i] = v[i]
 
 
-@njit(cache=True, _nrt=False, inline='always')
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
                 MG, r, v, a0, beta, H, n):
     """Peak update over [0, s_end*H] of a sub-step of length H from the end values and

@@ -128,15 +128,6 @@ N_OUT = 8
 # ---- shared event semantics -----------------------------------------------------------
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _dot(a, b):
-    """Dot product of two padded vectors (no BLAS: numba's np.dot calls it, costly here)."""
-    out = 0.0
-    for i in range(NP):
-        out += a[i] * b[i]
-    return out
-
-
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _rowdot(A, i, x):
     """Row i of a padded matrix times a padded vector (no array view is created)."""
     out = 0.0
@@ -612,37 +603,6 @@ def _peval(cf, m, s):
     return p, dp, 2.0 * ddp
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _solve(cf, m, lo, hi, tol, guess):
-    """Bracketed Newton on f = poly' (an extremum of the polynomial) over [lo, hi] where
-    f changes sign; stops on the bracket width. Returns (a, b): f(a) has the sign of
-    f(lo), f(b) that of f(hi), and |b - a| <= tol. (Event roots use :func:`_root`.)"""
-    flo = _peval(cf, m, lo)[1]
-    orient = 1.0 if flo < 0.0 else -1.0  # oriented f: negative at lo
-    a, b = lo, hi
-    x = guess if lo < guess < hi else 0.5 * (lo + hi)
-    for _ in range(100):
-        p, dp, ddp = _peval(cf, m, x)
-        f = orient * dp
-        df = orient * ddp
-        if f == 0.0:
-            return x, x
-        if f < 0.0:
-            a = x
-        else:
-            b = x
-        if b - a <= tol:
-            break
-        xn = x - f / df if df != 0.0 else 0.5 * (a + b)
-        if not (a < xn < b):
-            xn = 0.5 * (a + b)
-        if abs(xn - x) < 0.5 * tol:  # close the bracket from the other side
-            xn = x + 0.5 * tol if f < 0.0 else x - 0.5 * tol
-            xn = min(max(xn, a), b)
-        x = xn
-    return a, b
-
-
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _peval1(cf, m, s):
     """Polynomial value and first derivative, summed as even and odd parts in s^2
@@ -662,31 +622,56 @@ def _peval1(cf, m, s):
     return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _root(cf, m, lo, hi, tol, guess):
-    """Bracketed Newton for an event function, positive at lo and not at hi, on the
-    value and slope alone (one polynomial evaluation of two chains per iteration).
-    Returns (a, b), f(a) > 0 >= f(b), b - a <= tol."""
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+def _newton(cf, m, lo, hi, tol, guess, order):
+    """Bracketed Newton for a sign change of the polynomial (order 0, positive at lo, on
+    value and slope by :func:`_peval1`) or of its slope (order 1, an extremum, on slope
+    and curvature by :func:`_peval`) over [lo, hi]; stops on the bracket width. Returns
+    (a, b), |b - a| <= tol: the function has at a the sign it has at lo, at b the other."""
+    # oriented f: negative on the lo side
+    if order == 0:
+        orient = -1.0
+    else:
+        orient = 1.0 if _peval(cf, m, lo)[1] < 0.0 else -1.0
     a, b = lo, hi
     x = guess if lo < guess < hi else 0.5 * (lo + hi)
     for _ in range(100):
-        p, dp = _peval1(cf, m, x)
-        if p == 0.0:
+        if order == 0:
+            v, dv = _peval1(cf, m, x)
+        else:
+            _, v, dv = _peval(cf, m, x)
+        f = orient * v
+        df = orient * dv
+        if f == 0.0:
             return x, x
-        if p > 0.0:
+        if f < 0.0:
             a = x
         else:
             b = x
         if b - a <= tol:
             break
-        xn = x - p / dp if dp != 0.0 else 0.5 * (a + b)
+        xn = x - f / df if df != 0.0 else 0.5 * (a + b)
         if not (a < xn < b):
             xn = 0.5 * (a + b)
         if abs(xn - x) < 0.5 * tol:  # close the bracket from the other side
-            xn = x + 0.5 * tol if p > 0.0 else x - 0.5 * tol
+            xn = x + 0.5 * tol if f < 0.0 else x - 0.5 * tol
             xn = min(max(xn, a), b)
         x = xn
     return a, b
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _root(cf, m, lo, hi, tol, guess):
+    """A root of an event function's polynomial, positive at lo and not at hi:
+    (a, b), f(a) > 0 >= f(b), b - a <= tol (one two-chain evaluation an iteration)."""
+    return _newton(cf, m, lo, hi, tol, guess, 0)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _solve(cf, m, lo, hi, tol, guess):
+    """An extremum of the polynomial: a root of its slope, which changes sign on
+    [lo, hi]. Returns (a, b) as :func:`_newton` does."""
+    return _newton(cf, m, lo, hi, tol, guess, 1)
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")

@@ -2,17 +2,18 @@
 
 Method
 ------
-Between two events the reduced system ``M r_dd + C r_d + K r + R0 = -G xg_dd(t)`` is
+Between two events the reduced system ``M y_dd + C y_d + K y + R0 = -G xg_dd(t)`` is
 linear with constant coefficients, and inside one record step the forcing is linear in
 time. Its solution is an entire function of time, so:
 
-* Each piece (family, lower branch, upper branch) gets a *mode*: ``M^-1 K``, ``M^-1 C``,
-  ``M^-1 R0``, ``M^-1 G`` and the exact propagator over a sub-step ``h = dt/nsub``
-  (state-transition matrix plus the responses to the constant, ramp and resistance
-  forcing), built for all 50 pieces before the first step of a wall and record step
-  (about 3 ms) and cached for the next analysis of the same wall.
-  ``nsub`` is the smallest integer with ``nu*h <= 1``, ``nu = sqrt(|M^-1 K|) + |M^-1 C|``
-  bounding the piece's frequencies (1 for soft walls; a 1e9 N/m spring needs more).
+* Each piece (held joints, family, lower branch, upper branch) gets a *mode*: ``M^-1 K``,
+  ``M^-1 C``, ``M^-1 R0``, ``M^-1 G`` and the exact propagator over a sub-step
+  ``h = dt/nsub`` (state-transition matrix plus the responses to the resistance, constant
+  and ramp forcing: one matrix exponential of the augmented first-order system). They are
+  built in numpy for every piece a wall can reach, before its first analysis at a record
+  step (a few ms), and kept for the next analysis of the same wall and step.
+  ``nsub`` is the smallest integer with ``nu*h <= 1``, ``nu`` the spectral radius of the
+  first-order system (1 for soft walls; a 1e9 N/m spring needs more).
 * Whole sub-steps are stepped by one matrix-vector product (exact to round-off).
 * Where an event function changes sign on a sub-step, or may dip through zero between
   its ends (a cubic Hermite estimate from the exact values and rates at both ends says it
@@ -23,56 +24,59 @@ time. Its solution is an entire function of time, so:
   by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
   The state at an event is the series summed at the event time, not an interpolant.
 
-Speed (measured on the benchmark wall, 592 events, 2688 steps: 3.0 ms an analysis at
-first, about 0.5 ms now on a quiet moment of a noisy 2-core host). What paid, largest first:
+The integration loop (:func:`_march`) is one compiled function that never allocates
+(``_nrt=False``: numba's reference counting of every array passed to every helper cost
+more than the arithmetic); :func:`run` allocates its work arrays once per wall. What made
+it fast, and what each choice costs in compile time, is measured in
+``reports/performance.md``.
 
-* The integration loop (:func:`_march`) and every helper it calls are compiled with
-  ``_nrt=False``: numba's reference counting incremented and decremented every array
-  argument of every helper call (an atomic operation each), which cost more than the
-  arithmetic. Code compiled that way cannot allocate, so :func:`_integrate` allocates the
-  work arrays and builds the piece tables before the loop; the loop takes views of them.
-* Arrays over the reduced coordinates are padded to NP = 3 (unused entries exactly zero),
-  so the small loops have constant trip counts the compiler unrolls; the propagation, the
-  event functions, the trackers and the Taylor series are further specialised to the
-  true n (1, 2 or 3), which removes the padded products (about 9 % of the run for n=2).
-* Event roots start from the root of the cubic Hermite interpolant of the exact end
-  values and rates and use Newton on value and slope, evaluated as even and odd parts in
-  s^2 (four Horner chains of half the length): about 3.4 evaluations a root.
-* The Taylor recurrence is a chain of dependent products, so its cost is its latency:
-  for n = 2 the matrices and last terms are kept in registers and two terms are computed
-  a pass from the two before them (see :func:`_tail2`).
-* ``error_model="numpy"`` on the loop's functions: numba's default tests every float
-  division for a zero divisor to raise ZeroDivisionError (a compare and branch each);
-  the kernel guards its divisions itself, and results are bitwise the same (about 2 %).
-* Small things the profile (perf with a JIT symbol map) showed: a division chain per
-  sub-step, signed-index handling in descending loops, copying piece tables.
+Event semantics (contacts, the opening rule, held joints, impacts and their laws, merged
+impacts, branch changes, collapse) live in the small functions below and are shared with
+the scipy reference solver in :mod:`urmx.reference`.
 
-Event semantics (contacts, the opening rule, impacts and their laws, merged impacts,
-branch changes, collapse) live in the small functions below and are shared with the
-scipy reference solver in :mod:`urmx.reference`.
-
-Documented choices
-------------------
+Documented choices (MODEL.md section 4)
+---------------------------------------
 * Event times are located to ``TIME_TOL = 1e-12 s`` (bracket width).
-* Opening rule (MODEL.md section 4): both contacts start closed; a closed contact opens
-  when ``|g|`` exceeds ``g_open = 1e-6 * theta_a(Case 2)``, taking the side of ``g``.
-  With a flexible base the side on which the wall departs is decided by high-order
-  terms, and in a few percent of walls the result depends on this rule.
-* A contact that an impact leaves with ``|g_d| < v_rest = g_open/dt`` is closed again.
+* Both joints start closed; a closed joint opens when ``|g|`` exceeds
+  ``g_open = 1e-6 * theta_a(Case 2)``, taking the side of ``g``. A closed (or held) joint
+  has no side of its own: whenever one joint opens, is released or changes side at an
+  impact while the other is not open, the other's side is re-set so that the pattern is
+  family 2; family 1 needs both joints open. With a flexible base the side on which the
+  wall departs is decided by high-order terms, and in a few percent of walls the result
+  depends on this rule.
+* Held joints. A joint that an impact leaves with ``|g_d| < v_rest = g_open/dt`` is *held*
+  closed: its gap is kept at zero by a constraint (``theta1 = 0`` for the base joint,
+  ``theta2 = theta1`` for the crack joint, one coordinate fewer; its small residual rate is
+  removed by a perfectly plastic impulse), with the mass matrix and curves of the family
+  after that impact. It is released when the constraint would have to pull: when the
+  unconstrained motion of a family, at the current state, accelerates the gap away from
+  zero on that family's side (``sigma * g_dd(family(sigma)) > 0``; the current family is
+  tried first). While both families drive the gap back to zero (a sticking joint, which
+  none of the four patterns describes) it stays held. Physically: a joint that keeps
+  closing faster than the record can open it is closed until the opening rule opens it
+  again. This ends Zeno chatter (impacts accumulating at a point) in a held joint instead
+  of in the event bound.
 * Impacts closer than the window ``w`` (default 1e-6 s) are merged (section 7).
 * At most ``MAX_EVENTS_PER_STEP`` events in one record step; beyond that the run stops
-  with status ``event-limit``.
+  with status ``event-limit`` (a guard against a hang; no catalog wall reaches it).
 """
 
 from __future__ import annotations
 
 import math
+import sys
+import time
 from collections import OrderedDict
 
 import numpy as np
 from numba import njit
 
+from . import _jit
 from .model import (
+    HELD_BASE,
+    HELD_BOTH,
+    HELD_CRACK,
+    HELD_NONE,
     P_A1,
     P_A2,
     P_RIGID_B,
@@ -80,6 +84,7 @@ from .model import (
     Wall,
     classify,
     curve,
+    held_map,
     lower_case,
     n_dof,
     system,
@@ -96,33 +101,40 @@ MAX_EVENTS_PER_STEP = 200
 WINDOW = 1e-6  # merged-impact window w [s]
 G_OPEN_FACTOR = 1e-6
 
-NMODES = 50
-# every numba array over the reduced coordinates r is padded to NP entries: the unused
+# every numba array over the reduced coordinates is padded to NP entries: the unused
 # trailing ones stay exactly zero (padded matrices have zero rows and columns there), so
-# every small loop has a constant trip count the compiler unrolls (measured: about 6x
-# faster than loops of run-time length 1-3 at these sizes)
+# every small loop has a constant trip count the compiler unrolls
 NP = 3
-# rows over q = [theta1, theta2, u_b] of the quantities the kernel watches
+# rows over the coordinates y of the quantities the kernel watches
 ROW_T1, ROW_T2, ROW_UB, ROW_UC, ROW_UT, ROW_GC = range(6)
-# peak trackers (the first N_DISP act on r, the rest on r_dd plus the ground)
+# peak trackers (the first N_DISP act on y, the rest on y_dd plus the ground)
 TR_UB, TR_UC, TR_UT, TR_D1, TR_D2, TR_RL, TR_RU, TR_AB, TR_AC, TR_AT = range(10)
 N_TRACK = 10
 N_DISP = 7
-# integer state
-I_FAM, I_S, I_C, I_BOPEN, I_COPEN, I_BL, I_BU = range(7)
-N_IST = 7
+# integer state: family, sides, joint states, branches of the lower curve, the upper
+# curve and the lower curve of the other family (held crack joint), held state
+I_FAM, I_S, I_C, I_BOPEN, I_COPEN, I_BL, I_BU, I_BLA, I_H = range(9)
+N_IST = 9
+JOINT_CLOSED, JOINT_OPEN, JOINT_HELD = 0, 1, 2
 # event kinds
 EV_BASE_IMPACT, EV_CRACK_IMPACT, EV_BASE_OPEN, EV_CRACK_OPEN = 0, 1, 2, 3
 EV_LOWER, EV_UPPER, EV_COLLAPSE_LOWER, EV_COLLAPSE_UPPER = 4, 5, 6, 7
+EV_BASE_RELEASE, EV_CRACK_RELEASE, EV_HELD_BRANCH = 8, 9, 10
+EVENT_NAMES = ("base impact", "crack impact", "base opens", "crack opens", "lower branch",
+               "upper branch", "lower collapse", "upper collapse", "base released",
+               "crack released", "held branch")
 MAX_EV = 8
-# status codes
-ST_OK, ST_COLLAPSED, ST_EVENT_LIMIT = 0, 1, 2
+# status codes (ST_NEED_PIECE is internal: a piece's tables are missing, see run)
+ST_OK, ST_COLLAPSED, ST_EVENT_LIMIT, ST_NEED_PIECE = 0, 1, 2, 3
 STATUS = ("ok", "collapsed", "event-limit")
 LAWS = {"scale": 0, "contact": 1}
-# scalar outputs of _integrate (index order)
+# scalar outputs of _march (index order)
 O_COLLAPSE_T, O_FAM1_TIME, O_DURATION, O_BASE_IMP, O_CRACK_IMP, O_EVENTS = range(6)
-O_SUBSTEPS, O_SERIES = 6, 7
-N_OUT = 8
+O_SUBSTEPS, O_SERIES, O_HOLDS, O_NEED = 6, 7, 8, 9
+N_OUT = 10
+# pieces: held state x family x branches (module docstring); see mode_index
+NPIECE = 312
+REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, constant
 
 
 # ---- shared event semantics -----------------------------------------------------------
@@ -137,182 +149,242 @@ def _rowdot(A, i, x):
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _copy_row(src, i, dst, k):
-    for j in range(NP):
-        dst[k, j] = src[i, j]
+def mode_index(h, fam, bl, bu, bla):
+    """Index of a piece's tables: held state h, family, lower, upper and other-family
+    lower branch (the last only with a held crack joint)."""
+    if h == 0:
+        return (fam - 1) * 25 + (bl + 2) * 5 + (bu + 2)
+    if h == 1:
+        return 50 + (fam - 1) * 5 + (bu + 2)
+    if h == 2:
+        return 60 + (fam - 1) * 125 + (bl + 2) * 25 + (bu + 2) * 5 + (bla + 2)
+    return 310 + (fam - 1)
 
 
-@njit(cache=True)
-def watch_rows(P):
-    """Rows over the padded reduced coordinates r of theta1, theta2, u_b, u_c, u_t, g_crack.
-
-    Outputs fixed by a constraint get exactly zero rows (MODEL.md section 6)."""
-    a1, a2 = P[P_A1], P[P_A2]
-    Lq = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [a1, 0.0, 1.0],
-                   [a1, a2, 1.0], [-1.0, 1.0, 0.0]])
-    Ln = Lq @ transform(P)
-    L = np.zeros((6, NP))
-    L[:, :Ln.shape[1]] = Ln
-    if P[P_RIGID_B] > 0.5:
-        L[ROW_UB, :] = 0.0
-    if P[P_RIGID_T] > 0.5:
-        L[ROW_UT, :] = 0.0
-    return L
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
-def tracker_rows(P, L, fam, out):
-    """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
-    a1, a2 = P[P_A1], P[P_A2]
-    th0l = curve(P, lower_case(fam))[1]
-    th01 = curve(P, 1)[1]
-    for k in range(NP):
-        out[TR_UB, k] = L[ROW_UB, k]
-        out[TR_UC, k] = L[ROW_UC, k]
-        out[TR_UT, k] = L[ROW_UT, k]
-        out[TR_D1, k] = a1 * L[ROW_T1, k]
-        out[TR_D2, k] = a2 * L[ROW_T2, k]
-        out[TR_RL, k] = L[ROW_T1, k] / th0l
-        out[TR_RU, k] = L[ROW_T2, k] / th01
-        out[TR_AB, k] = L[ROW_UB, k]
-        out[TR_AC, k] = L[ROW_UC, k]
-        out[TR_AT, k] = L[ROW_UT, k]
+def piece_key(mid: int) -> tuple[int, int, int, int, int]:
+    """(h, fam, bl, bu, bla) of a piece index (the inverse of :func:`mode_index`)."""
+    if mid < 50:
+        return 0, mid // 25 + 1, (mid % 25) // 5 - 2, mid % 5 - 2, 0
+    if mid < 60:
+        return 1, (mid - 50) // 5 + 1, 0, (mid - 50) % 5 - 2, 0
+    if mid < 310:
+        m = mid - 60
+        return 2, m // 125 + 1, (m % 125) // 25 - 2, (m % 25) // 5 - 2, m % 5 - 2
+    return 3, mid - 310 + 1, 0, 0, 0
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def mode_index(fam, bl, bu):
-    return (fam - 1) * 25 + (bl + 2) * 5 + (bu + 2)
+def _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, s, kp, kd, tg):
+    """Event function k: e = s*(L[lrow] . y) + kp, falling through zero fires event kd."""
+    for j in range(NP):
+        rows[k, j] = L[lrow, j]
+        vrows[k, j] = 0.0
+    agc[k] = 0.0
+    sig[k] = s
+    kap[k] = kp
+    kind[k] = kd
+    tgt[k] = tg
+    return k + 1
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")
-def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, sig, kap, kind,
-                   tgt):
-    """Event functions e = sig*(L[lrow].r) + kap (event when e falls through 0) bounding
-    the signed branch b; signed boundaries, so passing through zero is never missed."""
+def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, vrows, agc,
+                   sig, kap, kind, tgt):
+    """Event functions bounding the signed branch b of a curve on row L[lrow]; signed
+    boundaries, so passing through zero is never missed (MODEL.md section 11)."""
     M0, th0, Mi, ta, tb = curve(P, case)
     if b == 0:
-        for sg in (1, -1):  # reaching +theta_a, -theta_a
-            _copy_row(L, lrow, rows, k)
-            sig[k] = -sg
-            kap[k] = ta
-            kind[k] = kind_branch
-            tgt[k] = sg
-            k += 1
-        return k
+        k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, -1.0, ta, kind_branch, 1)
+        return _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, 1.0, ta, kind_branch,
+                    -1)
     sg = 1 if b > 0 else -1
     inner = ta if abs(b) == 1 else tb
     outer = tb if abs(b) == 1 else th0
-    _copy_row(L, lrow, rows, k)
-    sig[k] = sg
-    kap[k] = -inner
-    kind[k] = kind_branch
-    tgt[k] = 0 if abs(b) == 1 else sg
-    k += 1
-    _copy_row(L, lrow, rows, k)
-    sig[k] = -sg
-    kap[k] = outer
-    kind[k] = kind_branch if abs(b) == 1 else kind_collapse
-    tgt[k] = 2 * sg
-    k += 1
+    k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, float(sg), -inner,
+             kind_branch, 0 if abs(b) == 1 else sg)
+    return _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, float(-sg), outer,
+                kind_branch if abs(b) == 1 else kind_collapse, 2 * sg)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _branch_bounds(P, case, b, collapse):
+    """Interval of theta of the signed branch b: (low, high); the softening branch ends at
+    theta0 when `collapse`, else it is continued without end."""
+    M0, th0, Mi, ta, tb = curve(P, case)
+    far = th0 if collapse else np.inf
+    if b == 0:
+        return -ta, ta
+    if b == 1:
+        return ta, tb
+    if b == -1:
+        return -tb, -ta
+    if b == 2:
+        return tb, far
+    return -far, -tb
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt):
+    """With the crack joint held (theta2 = theta1) the lower curve, the upper curve and
+    the other family's lower curve (its release test needs it) all follow theta1: two
+    event functions bound the intersection of their three branches; reaching a bound
+    re-classifies all three (coincident boundaries are one event), or is a collapse when
+    the bound is theta0 of the lower (current family) or the upper segment."""
+    fam = ist[I_FAM]
+    hi = np.inf
+    lo = -np.inf
+    kd_hi = EV_HELD_BRANCH
+    kd_lo = EV_HELD_BRANCH
+    for which in range(3):
+        if which == 0:
+            a, b = _branch_bounds(P, lower_case(fam), ist[I_BL], True)
+            kc = EV_COLLAPSE_LOWER
+            th0 = curve(P, lower_case(fam))[1]
+        elif which == 1:
+            a, b = _branch_bounds(P, 1, ist[I_BU], True)
+            kc = EV_COLLAPSE_UPPER
+            th0 = curve(P, 1)[1]
+        else:
+            a, b = _branch_bounds(P, lower_case(3 - fam), ist[I_BLA], False)
+            kc = EV_HELD_BRANCH
+            th0 = np.inf
+        collapse_hi = b == th0
+        if b < hi or (b == hi and collapse_hi):
+            hi = b
+            kd_hi = kc if collapse_hi else EV_HELD_BRANCH
+        collapse_lo = a == -th0
+        if a > lo or (a == lo and collapse_lo):
+            lo = a
+            kd_lo = kc if collapse_lo else EV_HELD_BRANCH
+    if hi < np.inf:
+        k = _put(L, ROW_T1, k, rows, vrows, agc, sig, kap, kind, tgt, -1.0, hi, kd_hi, 1)
+    if lo > -np.inf:
+        k = _put(L, ROW_T1, k, rows, vrows, agc, sig, kap, kind, tgt, 1.0, -lo, kd_lo, -1)
     return k
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")
-def active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt):
-    """The event functions of the current piece; returns how many."""
+def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt):
+    """The event functions of the current piece, ``e = sig*(rows.y + vrows.y_d +
+    agc*xg_dd) + kap`` (an event when e falls through zero); returns how many.
+
+    L: watch rows of the current held state; REL: the piece's release rows, the
+    unconstrained acceleration of each joint's gap under each family."""
     k = 0
+    rr = P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5
     for which in range(2):
         lrow = ROW_T1 if which == 0 else ROW_GC
         side = ist[I_S] if which == 0 else ist[I_C]
-        is_open = ist[I_BOPEN] if which == 0 else ist[I_COPEN]
-        if is_open:
-            _copy_row(L, lrow, rows, k)  # impact when side*g falls to zero
-            sig[k] = side
-            kap[k] = 0.0
-            kind[k] = EV_BASE_IMPACT if which == 0 else EV_CRACK_IMPACT
-            tgt[k] = 0
-            k += 1
-        else:
-            for sg in (1, -1):  # opening when |g| exceeds g_open
-                _copy_row(L, lrow, rows, k)
+        state = ist[I_BOPEN] if which == 0 else ist[I_COPEN]
+        if state == JOINT_OPEN:  # impact when side*g falls to zero
+            k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, float(side), 0.0,
+                     EV_BASE_IMPACT if which == 0 else EV_CRACK_IMPACT, 0)
+        elif state == JOINT_CLOSED:  # opening when |g| exceeds g_open
+            kd = EV_BASE_OPEN if which == 0 else EV_CRACK_OPEN
+            k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, -1.0, g_open, kd, 1)
+            k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, 1.0, g_open, kd, -1)
+        elif not (rr and which == 1):  # held (both rigid: one coordinate, the base's test)
+            other_open = (ist[I_COPEN] if which == 0 else ist[I_BOPEN]) == JOINT_OPEN
+            other_side = ist[I_C] if which == 0 else ist[I_S]
+            for sg in (1, -1):
+                # released to side sg when sg*g_dd of the family it would then be in
+                # turns positive (family 2 while the other joint is not open)
+                f = (1 if sg == other_side else 2) if other_open else 2
+                for j in range(NP):
+                    rows[k, j] = REL[which, f - 1, j]
+                    vrows[k, j] = REL[which, f - 1, NP + j]
+                agc[k] = REL[which, f - 1, 2 * NP]
                 sig[k] = -sg
-                kap[k] = g_open
-                kind[k] = EV_BASE_OPEN if which == 0 else EV_CRACK_OPEN
+                kap[k] = -sg * REL[which, f - 1, 2 * NP + 1]
+                kind[k] = EV_BASE_RELEASE if which == 0 else EV_CRACK_RELEASE
                 tgt[k] = sg
                 k += 1
-    if ist[I_BOPEN] and ist[I_COPEN] and P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5:
+    if ist[I_BOPEN] == JOINT_OPEN and ist[I_COPEN] == JOINT_OPEN and rr:
         k -= 1  # both supports rigid: the two contacts are one coordinate, one impact
-    k = _branch_events(P, lower_case(ist[I_FAM]), ist[I_BL], L, ROW_T1, EV_LOWER,
-                       EV_COLLAPSE_LOWER, k, rows, sig, kap, kind, tgt)
-    k = _branch_events(P, 1, ist[I_BU], L, ROW_T2, EV_UPPER, EV_COLLAPSE_UPPER, k, rows,
-                       sig, kap, kind, tgt)
+    h = ist[I_H]
+    if h == HELD_NONE:
+        k = _branch_events(P, lower_case(ist[I_FAM]), ist[I_BL], L, ROW_T1, EV_LOWER,
+                           EV_COLLAPSE_LOWER, k, rows, vrows, agc, sig, kap, kind, tgt)
+        k = _branch_events(P, 1, ist[I_BU], L, ROW_T2, EV_UPPER, EV_COLLAPSE_UPPER, k, rows,
+                           vrows, agc, sig, kap, kind, tgt)
+    elif h == HELD_BASE:
+        k = _branch_events(P, 1, ist[I_BU], L, ROW_T2, EV_UPPER, EV_COLLAPSE_UPPER, k, rows,
+                           vrows, agc, sig, kap, kind, tgt)
+    elif h == HELD_CRACK:
+        k = _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt)
     return k
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")
 def set_family(P, ist, r, v, L):
-    """Family from the pivot sides; a family change reclassifies the lower branch.
-    Returns True when |theta1| is at or beyond the new case's theta0 (immediate collapse)."""
+    """Family from the pivot sides; branches re-classified where the family or the held
+    state asks for it. Returns True when |theta1| is at or beyond the new case's theta0
+    (an immediate collapse)."""
     fam = 1 if ist[I_S] == ist[I_C] else 2
     th1 = _rowdot(L, ROW_T1, r)
-    if fam != ist[I_FAM]:
-        ist[I_FAM] = fam
-        case = lower_case(fam)
-        ist[I_BL] = classify(P, case, th1, _rowdot(L, ROW_T1, v))
-        if abs(th1) >= curve(P, case)[1]:
-            return True
-    return False
-
-
-@njit(cache=True)
-def mass_inverses(P, law):
-    """Padded M^-1 of family 1 and 2 (the mass depends on the family only), built once per
-    analysis for the contact law; the scale law needs none (zeros)."""
-    n = n_dof(P)
-    out = np.zeros((2, NP, NP))
-    if law == 1:
-        for fam in (1, 2):
-            out[fam - 1, :n, :n] = system(P, fam, 0, 0)[5]
-    return out
+    rate = _rowdot(L, ROW_T1, v)
+    changed = fam != ist[I_FAM]
+    ist[I_FAM] = fam
+    h = ist[I_H]
+    if h == HELD_BASE or h == HELD_BOTH:
+        ist[I_BL] = 0
+        ist[I_BLA] = 0
+        if h == HELD_BOTH:
+            ist[I_BU] = 0
+    elif h == HELD_CRACK:
+        ist[I_BL] = classify(P, lower_case(fam), th1, rate)
+        ist[I_BU] = classify(P, 1, th1, rate)
+        ist[I_BLA] = classify(P, lower_case(3 - fam), th1, rate)
+    else:
+        ist[I_BLA] = 0
+        if changed:
+            ist[I_BL] = classify(P, lower_case(fam), th1, rate)
+    return changed and abs(th1) >= curve(P, lower_case(fam))[1]
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _quad(Minv, f, L, i, j):
-    """L[i] . Minv[f] . L[j] over padded coordinates."""
+def _quad(Minv, L, i, j):
+    """L[i] . Minv . L[j] over padded coordinates."""
     out = 0.0
     for k in range(NP):
         s = 0.0
         for q in range(NP):
-            s += L[i, q] * Minv[f, q, k]
+            s += L[i, q] * Minv[q, k]
         out += s * L[j, k]
     return out
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")
-def impact_velocity(L, v, base, crack, cor, law, Minv, f):
-    """Velocity jump of an impact in padded reduced coordinates.
+def impact_velocity(L, v, base, crack, cor, law, Minv, rot):
+    """Velocity jump of an impact in padded coordinates.
 
-    scale: every rotational component times cor. The rotations are the first two padded
-    entries (theta1 and theta2, or theta1 and a zero pad), an independent u_b the third,
-    which is unchanged.
+    scale: every rotational component (rot[i] = 1) times cor; an independent u_b is
+    unchanged.
     contact: v+ = v- + Minv J^T lam with J v+ = cor * J v- (generalised Newton law),
-    Minv = Minv[f] of the pattern after the impact; parallel rows (both supports rigid)
-    use one."""
+    Minv of the pattern after the impact; parallel rows (both supports rigid) use one.
+    With cor = 0 and the contact law this is the plastic impulse that holds a joint."""
     if law == 0:
-        v[0] *= cor
-        v[1] *= cor
+        for i in range(NP):
+            if rot[i] > 0.5:
+                v[i] *= cor
         return
     ja = ROW_T1 if base else ROW_GC
     jb = ROW_GC
     two = base and crack
-    Aaa = _quad(Minv, f, L, ja, ja)
+    Aaa = _quad(Minv, L, ja, ja)
+    det = 1.0
+    Aab = 0.0
+    Aba = 0.0
+    Abb = 0.0
     if two:
-        Aab = _quad(Minv, f, L, ja, jb)
-        Aba = _quad(Minv, f, L, jb, ja)
-        Abb = _quad(Minv, f, L, jb, jb)
+        Aab = _quad(Minv, L, ja, jb)
+        Aba = _quad(Minv, L, jb, ja)
+        Abb = _quad(Minv, L, jb, jb)
         det = Aaa * Abb - Aab * Aba
         if abs(det) <= 1e-12 * abs(Aaa * Abb):
             two = False
+    if Aaa == 0.0:
+        return
     ra = (cor - 1.0) * _rowdot(L, ja, v)
     if two:
         rb = (cor - 1.0) * _rowdot(L, jb, v)
@@ -324,18 +396,64 @@ def impact_velocity(L, v, base, crack, cor, law, Minv, f):
     for i in range(NP):
         s = 0.0
         for k in range(NP):
-            s += Minv[f, i, k] * (L[ja, k] * lam_a + L[jb, k] * lam_b)
+            s += Minv[i, k] * (L[ja, k] * lam_a + L[jb, k] * lam_b)
         v[i] += s
 
 
+@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
+    """Relative acceleration of the quantity of row L[lrow] (padded arrays)."""
+    out = 0.0
+    for i in range(NP):
+        s = -MR[i] - MG[i] * ag
+        for k in range(NP):
+            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
+        out += L[lrow, i] * s
+    return out
+
+
 @njit(cache=True, _nrt=False, error_model="numpy")
-def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, MR, MG,
-                 Minv_fam, v_rest, counts):
+def _held_state(ist):
+    return (1 if ist[I_BOPEN] == JOINT_HELD else 0) + (2 if ist[I_COPEN] == JOINT_HELD else 0)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _change_coords(GX, h_old, h_new, r, v, tmp):
+    """Map a state to the coordinates of another held state (exact: selections)."""
+    if h_old == h_new:
+        return
+    X = GX[h_old, h_new]
+    for which in range(2):
+        x = r if which == 0 else v
+        for i in range(NP):
+            tmp[i] = x[i]
+        for i in range(NP):
+            s = 0.0
+            for k in range(NP):
+                s += X[i, k] * tmp[k]
+            x[i] = s
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _reset_other(ist, which):
+    """A closed or held joint has no side of its own: when joint `which` (0 base, 1 crack)
+    opens, is released or changes side while the other is not open, the other's side is
+    re-set so that the pattern is family 2 (MODEL.md section 4)."""
+    if which == 0 and ist[I_COPEN] != JOINT_OPEN:
+        ist[I_C] = -ist[I_S]
+    elif which == 1 and ist[I_BOPEN] != JOINT_OPEN:
+        ist[I_S] = -ist[I_C]
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, ag_now, MK,
+                 MC, MR, MG, v_rest, counts, tmp):
     """Carry out one event at the current state (shared by both solvers; padded arrays).
 
-    Minv_fam: padded M^-1 per family (:func:`mass_inverses`), used by the contact law.
-
-    Updates the integer state ist and the velocities v in place and counts impacts.
+    GL, GX, GMI, GROT: watch rows, coordinate maps, inverse masses and rotation masks of
+    the held states (:func:`geometry`). Updates the integer state ist, the velocities v
+    (impacts) and, when a joint is held or released, the coordinates of r and v in place.
+    Counts impacts in counts[0:2] and holds in counts[2].
     Returns 0, or 1 / 2 when the lower / upper segment collapses (terminal)."""
     if kd == EV_COLLAPSE_LOWER:
         return 1
@@ -347,24 +465,39 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
     if kd == EV_UPPER:
         ist[I_BU] = target
         return 0
-    if kd == EV_BASE_OPEN or kd == EV_CRACK_OPEN:
-        # a closed joint opens on the side of g, without an impact (MODEL.md section 4)
-        if kd == EV_BASE_OPEN:
-            ist[I_BOPEN] = 1
+    h = ist[I_H]
+    L = GL[h]
+    if kd == EV_HELD_BRANCH:  # re-classify the three branches that follow theta1
+        return 1 if set_family(P, ist, r, v, L) else 0
+    rr = P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5
+    if kd == EV_BASE_OPEN or kd == EV_CRACK_OPEN or kd == EV_BASE_RELEASE \
+            or kd == EV_CRACK_RELEASE:
+        # a closed joint opens on the side of g, a held one on the side it is released
+        # to, without an impact (MODEL.md section 4)
+        base = kd == EV_BASE_OPEN or kd == EV_BASE_RELEASE
+        if base:
+            ist[I_BOPEN] = JOINT_OPEN
             ist[I_S] = target
         else:
-            ist[I_COPEN] = 1
+            ist[I_COPEN] = JOINT_OPEN
             ist[I_C] = target
-        return 1 if set_family(P, ist, r, v, L) else 0
+        if rr and kd == EV_BASE_RELEASE:  # one coordinate: both joints are released
+            ist[I_COPEN] = JOINT_OPEN
+            ist[I_C] = -target
+        _reset_other(ist, 0 if base else 1)
+        h_new = _held_state(ist)
+        _change_coords(GX, h, h_new, r, v, tmp)
+        ist[I_H] = h_new
+        return 1 if set_family(P, ist, r, v, GL[h_new]) else 0
     base = kd == EV_BASE_IMPACT
     crack = kd == EV_CRACK_IMPACT
-    if P[P_RIGID_B] > 0.5 and P[P_RIGID_T] > 0.5:
+    if rr:
         base = True  # both supports rigid: the two joints close together, one impact
         crack = True
     else:
         # merged impact: the other open joint, continued on the motion before the
         # impact, closes within the window w (MODEL.md section 7)
-        other_open = ist[I_COPEN] if base else ist[I_BOPEN]
+        other_open = (ist[I_COPEN] if base else ist[I_BOPEN]) == JOINT_OPEN
         if other_open:
             lrow = ROW_GC if base else ROW_T1
             side = ist[I_C] if base else ist[I_S]
@@ -381,40 +514,31 @@ def handle_event(P, L, ist, kd, target, r, v, cor, law, window, ag_now, MK, MC, 
     if crack:
         ist[I_C] = -ist[I_C]
         counts[1] += 1
+    if not (base and crack):
+        _reset_other(ist, 0 if base else 1)
     fam_after = 1 if ist[I_S] == ist[I_C] else 2
-    impact_velocity(L, v, base, crack, cor, law, Minv_fam, fam_after - 1)
-    # a joint left slower than v_rest is closed again, under the opening rule
-    if base and abs(_rowdot(L, ROW_T1, v)) < v_rest:
-        ist[I_BOPEN] = 0
-    if crack and abs(_rowdot(L, ROW_GC, v)) < v_rest:
-        ist[I_COPEN] = 0
-    return 1 if set_family(P, ist, r, v, L) else 0
+    Minv = GMI[h, fam_after - 1]
+    impact_velocity(L, v, base, crack, cor, law, Minv, GROT[h])
+    # a joint left slower than v_rest is held closed, in the family after the impact
+    hold_b = base and abs(_rowdot(L, ROW_T1, v)) < v_rest
+    hold_c = crack and abs(_rowdot(L, ROW_GC, v)) < v_rest
+    if rr:
+        hold_c = hold_b
+    if hold_b or hold_c:
+        counts[2] += 1
+        # the residual rate of the held gap is removed by a plastic impulse
+        impact_velocity(L, v, hold_b, hold_c and not rr, 0.0, 1, Minv, GROT[h])
+        if hold_b:
+            ist[I_BOPEN] = JOINT_HELD
+        if hold_c:
+            ist[I_COPEN] = JOINT_HELD
+        h_new = _held_state(ist)
+        _change_coords(GX, h, h_new, r, v, tmp)
+        ist[I_H] = h_new
+    return 1 if set_family(P, ist, r, v, GL[ist[I_H]]) else 0
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
-    """Relative acceleration of the quantity of row L[lrow] (padded arrays)."""
-    out = 0.0
-    for i in range(NP):
-        s = -MR[i] - MG[i] * ag
-        for k in range(NP):
-            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
-        out += L[lrow, i] * s
-    return out
-
-
-# ---- numerics: modes, Taylor series, scalar polynomials -------------------------------
-
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _norm_inf(A):
-    best = 0.0
-    for i in range(A.shape[0]):
-        s = 0.0
-        for j in range(A.shape[1]):
-            s += abs(A[i, j])
-        best = max(best, s)
-    return best
-
+# ---- numerics: Taylor series, scalar polynomials, roots --------------------------------
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
@@ -534,13 +658,12 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays; n reduced coordinates,
     the padding columns of D stay zero). Returns the number of terms.
 
-    The loops are specialised to n = 1, 2, 3: this is the kernel's most-run arithmetic
-    (two series per event), and padded loops did 9 products per term where n = 2 needs 4."""
+    The loops are specialised to n = 2 (the paper's walls on a rigid floor: this is the
+    kernel's most-run arithmetic, two series per event, and padded loops do 9 products
+    per term where n = 2 needs 4); every other n runs the padded loops (exact zeros)."""
     if n == 2:
         return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 2)
-    if n == 3:
-        return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 3)
-    return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, 1)
+    return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, NP)
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -570,8 +693,8 @@ def _sum_state(D, m, s, h, r, v):
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
 def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
-    """Coefficients in s = t/h of sig*row.r + kap (displacement kind) or of
-    row.r_dd + xg_dd (acceleration kind), row = R[ri]. Returns their number."""
+    """Coefficients in s = t/h of sig*row.y + kap (displacement kind) or of
+    row.y_dd + xg_dd (acceleration kind), row = R[ri]. Returns their number."""
     if not acc_kind:
         for j in range(m):
             s = 0.0
@@ -588,6 +711,23 @@ def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     cf[0] += a0
     cf[1] += beta * h
     return m - 2
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig, kap, cf):
+    """Coefficients in s = t/h of a release function sig*(row.y + vrow.y_d + agc*xg_dd)
+    + kap on the Taylor series D of one sub-step. Returns their number."""
+    for j in range(m):
+        s = 0.0
+        for i in range(NP):
+            s += rows[k, i] * D[j, i]
+            if j + 1 < m:
+                s += vrows[k, i] * (j + 1.0) * D[j + 1, i] / h
+        cf[j] = sig * s
+    cf[0] += sig * agc[k] * a0 + kap
+    if m > 1:
+        cf[1] += sig * agc[k] * beta * h
+    return m
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -784,80 +924,6 @@ def _hermite_ext(p0, p1, m0, m1):
     return lo, hi, slo, shi
 
 
-@njit(cache=True)
-def _build_mode(P, fam, bl, bu, dt, idx, ready, nsub, mats, vecs, prop, pvec, D):
-    """Fill the cached tables of one piece (padded): M^-1 K, M^-1 C, M^-1 R0, M^-1 G and
-    the exact propagator over h = dt/nsub (state transition E and the responses to the
-    resistance, constant and ramp forcing), each column summed from its Taylor series."""
-    M, C, K, R0, MinvG, Minv = system(P, fam, bl, bu)
-    n = M.shape[0]
-    MKn = Minv @ K
-    MCn = Minv @ C
-    MRn = Minv @ R0
-    MK = np.zeros((NP, NP))
-    MC = np.zeros((NP, NP))
-    MR = np.zeros(NP)
-    MG = np.zeros(NP)
-    MK[:n, :n] = MKn
-    MC[:n, :n] = MCn
-    MR[:n] = MRn
-    MG[:n] = MinvG
-    mats[idx, 0] = MK
-    mats[idx, 1] = MC
-    vecs[idx, 0] = MR
-    vecs[idx, 1] = MG
-    # nu: the spectral radius of the first-order matrix [[0, I], [-M^-1 K, -M^-1 C]]
-    # (the norm bound sqrt|M^-1 K| + |M^-1 C| is about twice as large for stiff springs)
-    A = np.zeros((2 * n, 2 * n), np.complex128)
-    for i in range(n):
-        A[i, n + i] = 1.0
-        for j in range(n):
-            A[n + i, j] = -MKn[i, j]
-            A[n + i, n + j] = -MCn[i, j]
-    nu = np.max(np.abs(np.linalg.eigvals(A)))
-    if not np.isfinite(nu):
-        nu = math.sqrt(_norm_inf(MKn)) + _norm_inf(MCn)
-    ns = max(1, int(math.ceil(nu * dt / RHO)))
-    nsub[idx] = ns
-    h = dt / ns
-    z = np.zeros(NP)
-    e = np.zeros(NP)
-    r = np.zeros(NP)
-    v = np.zeros(NP)
-    prop[idx] = 0.0
-    for col in range(2 * NP):
-        i = col if col < NP else col - NP
-        if i >= n:
-            continue  # a padding coordinate: zero column
-        e[:] = 0.0
-        e[i] = 1.0
-        if col < NP:
-            m = _taylor(MK, MC, z, z, e, z, 0.0, 0.0, h, D, n)
-        else:
-            m = _taylor(MK, MC, z, z, z, e, 0.0, 0.0, h, D, n)
-        _sum_state(D, m, 1.0, h, r, v)
-        prop[idx, :NP, col] = r
-        prop[idx, NP:, col] = v
-    for which in range(3):
-        if which == 0:
-            m = _taylor(MK, MC, MR, z, z, z, 0.0, 0.0, h, D, n)
-        elif which == 1:
-            m = _taylor(MK, MC, z, MG, z, z, 1.0, 0.0, h, D, n)
-        else:
-            m = _taylor(MK, MC, z, MG, z, z, 0.0, 1.0, h, D, n)
-        _sum_state(D, m, 1.0, h, r, v)
-        pvec[idx, which, :NP] = r
-        pvec[idx, which, NP:] = v
-    ready[idx] = True
-
-
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _mode_tables(mats, vecs, prop, pvec, mid):
-    """Views of the cached tables of piece mid: M^-1 K, M^-1 C, M^-1 R0, M^-1 G, the
-    propagator E and its forcing responses."""
-    return mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], prop[mid], pvec[mid]
-
-
 # ---- the integrator ---------------------------------------------------------------------
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -892,15 +958,19 @@ def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
+def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
     """Tracker values and rates at one instant (accelerations absolute); acc and jerk
-    are scratch arrays. Specialised to n = 1, 2, 3 like :func:`_taylor`."""
+    are scratch arrays. Specialised to n = 2 like :func:`_taylor`."""
     if n == 2:
         _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 2)
-    elif n == 3:
-        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 3)
     else:
-        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 1)
+        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
+    """:func:`_point_fast` on the padded loops, for the instants off the hot path."""
+    _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -923,24 +993,29 @@ def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
     """The state after a whole sub-step by the exact propagator (rb, vb must not be r, v)."""
     if n == 2:
         _propagate_n(E, PV, r, v, a0, beta, rb, vb, 2)
-    elif n == 3:
-        _propagate_n(E, PV, r, v, a0, beta, rb, vb, 3)
     else:
-        _propagate_n(E, PV, r, v, a0, beta, rb, vb, 1)
+        _propagate_n(E, PV, r, v, a0, beta, rb, vb, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
-def _event_table(rows, sig, kap, kind, ne, RT, KP, OPN):
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
     """The event functions of a piece as signed rows stored by column (RT[i, k] =
     sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
-    functions (e = 1, rate 0) so that all are evaluated in fixed-length loops."""
+    functions (e = 1, rate 0) so that all are evaluated in fixed-length loops. Returns
+    whether a release function (with rate and ground terms) is among them."""
+    rel = False
     for k in range(MAX_EV):
         live = k < ne
         for i in range(NP):
             RT[i, k] = sig[k] * rows[k, i] if live else 0.0
+            RVT[i, k] = sig[k] * vrows[k, i] if live else 0.0
+        AGT[k] = sig[k] * agc[k] if live else 0.0
         KP[k] = kap[k] if live else 1.0
         OPN[k] = 1.0 if live and (kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN) \
             else 0.0
+        if live and (kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE):
+            rel = True
+    return rel
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -960,10 +1035,30 @@ def _events_at(RT, KP, r, v, e, ed, n):
     """Values and rates of all MAX_EV event functions at state (r, v)."""
     if n == 2:
         _events_at_n(RT, KP, r, v, e, ed, 2)
-    elif n == 3:
-        _events_at_n(RT, KP, r, v, e, ed, 3)
     else:
-        _events_at_n(RT, KP, r, v, e, ed, 1)
+        _events_at_n(RT, KP, r, v, e, ed, NP)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _events_now(RT, KP, r, v, e, ed):
+    """:func:`_events_at` on the padded loops, for the instants off the hot path."""
+    _events_at_n(RT, KP, r, v, e, ed, NP)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
+    """The rate and ground terms of release functions, added to e and ed (held pieces)."""
+    for k in range(MAX_EV):
+        a = AGT[k] * ag
+        b = AGT[k] * beta
+        for i in range(NP):
+            acc = -MR[i] - MG[i] * ag
+            for j in range(NP):
+                acc -= MK[i, j] * r[j] + MC[i, j] * v[j]
+            a += RVT[i, k] * v[i]
+            b += RVT[i, k] * acc
+        e[k] += a
+        ed[k] += b
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -975,335 +1070,6 @@ def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
         # (a superset: a rate turning upward is flagged whatever the values)
         flag |= (e_b[k] <= 0.0) | (OPN[k] * e_a[k] > 0.0) | ((ed_a[k] < 0.0) & (ed_b[k] > 0.0))
     return flag
-
-
-@njit(cache=True)
-def _integrate(P, ag, dt, ntail, cor, law, window, ready, nsub, mats, vecs, prop, pvec,
-               peaks, outs, hist, want_hist, evlog):
-    """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
-    Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist, hist[k, :] at every grid
-    point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t, pattern, then r, v).
-    Returns a status code."""
-    L = watch_rows(P)
-    TRF = np.zeros((2, N_TRACK, NP))  # tracker rows of families 1 and 2
-    D = np.zeros((KMAX, NP))
-    cf = np.zeros(KMAX)
-    ist = np.zeros(N_IST, np.int64)
-    rows = np.zeros((MAX_EV, NP))
-    sig = np.zeros(MAX_EV)
-    kap = np.zeros(MAX_EV)
-    kind = np.zeros(MAX_EV, np.int64)
-    tgt = np.zeros(MAX_EV, np.int64)
-    e_a = np.zeros(MAX_EV)
-    ed_a = np.zeros(MAX_EV)
-    e_b = np.zeros(MAX_EV)
-    ed_b = np.zeros(MAX_EV)
-    RT = np.zeros((NP, MAX_EV))
-    KP = np.zeros(MAX_EV)
-    OPN = np.zeros(MAX_EV)
-    val_a = np.zeros(N_TRACK)
-    der_a = np.zeros(N_TRACK)
-    val_b = np.zeros(N_TRACK)
-    der_b = np.zeros(N_TRACK)
-    r = np.zeros(NP)
-    v = np.zeros(NP)
-    rb = np.zeros(NP)
-    vb = np.zeros(NP)
-    sacc = np.zeros(NP)
-    sjerk = np.zeros(NP)
-    Minv_fam = mass_inverses(P, law)
-    counts = np.zeros(2, np.int64)  # base, crack impacts
-    tracker_rows(P, L, 1, TRF[0])
-    tracker_rows(P, L, 2, TRF[1])
-    # every piece's tables, built once per wall and record step (_march cannot allocate)
-    for fam in (1, 2):
-        for bl in range(-2, 3):
-            for bu in range(-2, 3):
-                mid = mode_index(fam, bl, bu)
-                if not ready[mid]:
-                    _build_mode(P, fam, bl, bu, dt, mid, ready, nsub, mats, vecs, prop, pvec, D)
-    return _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec,
-                  peaks, outs, hist, want_hist, evlog, L, TRF, D, cf, ist, rows, kind, tgt,
-                  Minv_fam, counts, (sig, kap, e_a, ed_a, e_b, ed_b, RT, KP, OPN),
-                  (val_a, der_a, val_b, der_b), (r, v, rb, vb, sacc, sjerk))
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _march(P, ag, dt, ntail, cor, law, window, nsub, mats, vecs, prop, pvec, peaks,
-           outs, hist, want_hist, evlog, L, TRF, D, cf, ist, rows, kind, tgt, Minv_fam,
-           counts, evbuf, trbuf, vecbuf):
-    """The integration loop of :func:`_integrate`, on the work arrays it allocated.
-
-    Compiled without numba's reference counting (``_nrt=False``): it never allocates, and
-    the counting of every array passed to every helper cost more than the arithmetic."""
-    sig, kap, e_a, ed_a, e_b, ed_b, RT, KP, OPN = evbuf
-    val_a, der_a, val_b, der_b = trbuf
-    r, v, rb, vb, sacc, sjerk = vecbuf
-    n = n_dof(P)
-    N = ag.shape[0]
-    nsteps = N - 1 + ntail
-    g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
-    v_rest = g_open / dt
-    # start: at rest, family 2, provisional sides against the first ground motion
-    first = 0.0
-    for k in range(N):
-        if ag[k] != 0.0:
-            first = ag[k]
-            break
-    ist[I_S] = -1 if first > 0 else 1
-    ist[I_C] = -ist[I_S]
-    ist[I_FAM] = 2
-    ist[I_BOPEN] = 0
-    ist[I_COPEN] = 0
-    ist[I_BL] = 0
-    ist[I_BU] = 0
-    for t in range(N_TRACK):
-        peaks[t] = 0.0
-    for k in range(N_OUT):
-        outs[k] = 0.0
-    outs[O_COLLAPSE_T] = np.nan
-    status = ST_OK
-    fam1_time = 0.0
-    n_events = 0
-    n_sub = 0
-    n_series = 0
-    t_end = nsteps * dt
-    TR = TRF[ist[I_FAM] - 1]
-    mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
-    ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-    _event_table(rows, sig, kap, kind, ne, RT, KP, OPN)
-    _events_at(RT, KP, r, v, e_a, ed_a, n)
-    MK, MC, MR, MG, E, PV = _mode_tables(mats, vecs, prop, pvec, mid)
-    a_now = ag[0] if N > 0 else 0.0
-    beta0 = (ag[1] - ag[0]) / dt if N > 1 else 0.0
-    _point(MK, MC, MR, MG, TR, r, v, a_now, beta0, val_a, der_a, sacc, sjerk, n)
-    for t in range(N_TRACK):
-        peaks[t] = max(peaks[t], abs(val_a[t]))
-    if want_hist:
-        _record(hist, 0, L, ist, r, v, val_a, n)
-    duration = t_end
-    done = False
-    beta_prev = beta0
-    for step in range(nsteps):
-        if step < N - 1:
-            alpha = ag[step]
-            beta = (ag[step + 1] - ag[step]) / dt
-        else:
-            alpha = 0.0
-            beta = 0.0
-        t0 = step * dt
-        tau = 0.0
-        ev_here = 0
-        # the rates of the absolute accelerations jump with the slope of the record:
-        # d(rate)/d(beta) = 1 - row . M^-1 G (values and other rates are continuous)
-        if step > 0:
-            dbeta = beta - beta_prev
-            for t in range(N_DISP, N_TRACK):
-                der_a[t] += dbeta * (1.0 - _rowdot(TR, t, MG))
-        beta_prev = beta
-        while True:
-            ns = nsub[mid]
-            h_sub = dt
-            tb = dt
-            if ns > 1:
-                h_sub = dt / ns
-                # end of this sub-step: the next multiple of h_sub (the step end at most)
-                j = int(math.floor(tau / h_sub + 1e-9)) + 1
-                if j < ns:
-                    tb = j * h_sub
-            H = tb - tau
-            if H <= 1e-15 * dt:
-                break
-            n_sub += 1
-            a0 = alpha + beta * tau
-            full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
-            m_taylor = 0
-            if full:
-                _propagate(E, PV, r, v, a0, beta, rb, vb, n)
-            else:
-                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                _sum_state(D, m_taylor, 1.0, H, rb, vb)
-            _events_at(RT, KP, rb, vb, e_b, ed_b, n)
-            # earliest event on [tau, tb]
-            s_ev = 2.0
-            k_ev = -1
-            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b) else 0):
-                opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
-                crossing = e_a[k] > 0.0 and e_b[k] <= 0.0
-                # started on (or just behind) zero moving inward, and ends at or behind
-                # it again: it rose and fell back (after an impact, a merged impact)
-                rebound = e_a[k] <= 0.0 and ed_a[k] > 0.0 and e_b[k] <= 0.0
-                dip = False
-                if opening:
-                    # a tiny threshold (g_open) can be crossed and recrossed within a
-                    # sub-step, with zero rate at the start (at rest): scan the series
-                    dip = not crossing and e_a[k] > 0.0
-                elif not crossing and e_a[k] > 0.0 and e_b[k] > 0.0 and ed_a[k] < 0.0 \
-                        and ed_b[k] > 0.0 and min(e_a[k], e_b[k]) - (4.0 / 27.0) * H * (
-                            ed_b[k] - ed_a[k]) < 0.25 * max(e_a[k], e_b[k]):
-                    # (the Hermite cubic stays above min(ends) - 4/27 (|m0| + |m1|))
-                    lo, hi, slo, shi = _hermite_ext(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
-                    dip = lo < 0.25 * max(e_a[k], e_b[k])
-                if not (crossing or dip or rebound):
-                    continue
-                if m_taylor == 0:
-                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                mc = _scalar_poly(rows, k, D, m_taylor, False, H, 0.0, 0.0, sig[k], kap[k],
-                                  cf)
-                s_lo = 0.0
-                s_hi = 1.0
-                if rebound:
-                    s_lo = _positive_max(cf, mc)
-                    if s_lo < 0.0 or s_lo >= s_ev:
-                        continue
-                if dip:
-                    if opening and _lower_bound(cf, mc) > 0.0:
-                        continue  # e(s) >= c0 - sum|c_j| > 0 on [0, 1]: no crossing
-                    # the exact first point where e <= 0 on the sub-step, if any
-                    s_hi = _first_nonpositive(cf, mc, ed_a[k] < 0.0 and not opening)
-                    if s_hi > 1.0:
-                        continue
-                if s_hi > s_ev:
-                    # only an earlier root matters: has e already crossed at s_ev?
-                    if _peval(cf, mc, s_ev)[0] > 0.0:
-                        continue
-                    s_hi = s_ev
-                tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
-                if crossing and s_hi == 1.0:
-                    guess = _hermite_root(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
-                else:
-                    guess = 0.5 * (s_lo + s_hi)
-                lo_, hi_ = _root(cf, mc, s_lo, s_hi, tol, guess)
-                s_root = hi_  # the side where the event function has crossed
-                if s_root < s_ev or k_ev < 0:
-                    s_ev = s_root
-                    k_ev = k
-            if k_ev < 0:
-                # no event: peaks over the sub-step, then advance
-                _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b, sacc,
-                       sjerk, n)
-                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, 1.0, m_taylor, D,
-                                       cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
-                if m_taylor:
-                    n_series += 1
-                if ist[I_FAM] == 1:
-                    fam1_time += H
-                tau = tb
-                for i in range(NP):
-                    r[i] = rb[i]
-                    v[i] = vb[i]
-                for t in range(N_TRACK):
-                    val_a[t] = val_b[t]
-                    der_a[t] = der_b[t]
-                for k in range(MAX_EV):
-                    e_a[k] = e_b[k]
-                    ed_a[k] = ed_b[k]
-                if tb >= dt:
-                    break
-                continue
-            # ---- an event at tau + s_ev*H ----
-            n_series += 1
-            if m_taylor == 0:
-                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-            He = s_ev * H
-            _sum_state(D, m_taylor, s_ev, H, rb, vb)
-            te_loc = tau + He
-            _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b, sacc,
-                   sjerk, n)
-            if He > 0.0:
-                # peaks on [tau, te], the one-sided values before the event included
-                _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_ev, m_taylor, D, cf, MK,
-                            MC, MR, MG, r, v, a0, beta, H, n)
-            if ist[I_FAM] == 1:
-                fam1_time += He
-            tau = te_loc
-            for i in range(NP):
-                r[i] = rb[i]
-                v[i] = vb[i]
-            # handle this event and every other one due at the same instant
-            while k_ev >= 0:
-                if n_events < evlog.shape[0]:
-                    evlog[n_events, 0] = t0 + tau
-                    evlog[n_events, 1] = kind[k_ev]
-                    evlog[n_events, 2] = tgt[k_ev]
-                n_events += 1
-                ev_here += 1
-                if ev_here > MAX_EVENTS_PER_STEP:
-                    status = ST_EVENT_LIMIT
-                    break
-                code = handle_event(P, L, ist, kind[k_ev], tgt[k_ev], r, v, cor, law, window,
-                                    alpha + beta * tau, MK, MC, MR, MG, Minv_fam, v_rest,
-                                    counts)
-                collapse_now = code != 0
-                if code == 1:
-                    peaks[TR_RL] = 1.0
-                elif code == 2:
-                    peaks[TR_RU] = 1.0
-                if collapse_now:
-                    status = ST_COLLAPSED
-                    break
-                # new piece
-                TR = TRF[ist[I_FAM] - 1]
-                mid = mode_index(ist[I_FAM], ist[I_BL], ist[I_BU])
-                ne = active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-                _event_table(rows, sig, kap, kind, ne, RT, KP, OPN)
-                MK, MC, MR, MG, E, PV = _mode_tables(mats, vecs, prop, pvec, mid)
-                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc,
-                       sjerk, n)
-                for t in range(N_TRACK):  # the one-sided values after the event
-                    peaks[t] = max(peaks[t], abs(val_a[t]))
-                _events_at(RT, KP, r, v, e_a, ed_a, n)
-                # a boundary reached at the same instant and moving outward fires now
-                k_ev = -1
-                for k in range(ne):
-                    if e_a[k] <= 0.0 and ed_a[k] < 0.0:
-                        k_ev = k
-                        break
-            if status != ST_OK:
-                done = True
-                duration = t0 + tau
-                if status == ST_COLLAPSED:
-                    outs[O_COLLAPSE_T] = t0 + tau
-                break
-        if done:
-            break
-        if step == N - 2:
-            # the record ends: the right-hand limit of the absolute accelerations (xg_dd = 0)
-            _point(MK, MC, MR, MG, TR, r, v, 0.0, 0.0, val_b, der_b, sacc, sjerk, n)
-            for t in range(N_DISP, N_TRACK):
-                peaks[t] = max(peaks[t], abs(val_b[t]))
-        if want_hist:
-            a_grid = ag[step + 1] if step + 1 < N else 0.0
-            b_grid = 0.0
-            _point(MK, MC, MR, MG, TR, r, v, a_grid, b_grid, val_b, der_b, sacc, sjerk, n)
-            _record(hist, step + 1, L, ist, r, v, val_b, n)
-    if status == ST_COLLAPSED:
-        peaks[TR_RL] = min(peaks[TR_RL], 1.0)
-        peaks[TR_RU] = min(peaks[TR_RU], 1.0)
-    outs[O_FAM1_TIME] = fam1_time
-    outs[O_DURATION] = duration
-    outs[O_BASE_IMP] = counts[0]
-    outs[O_CRACK_IMP] = counts[1]
-    outs[O_EVENTS] = n_events
-    outs[O_SUBSTEPS] = n_sub
-    outs[O_SERIES] = n_series
-    return status
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _record(hist, k, L, ist, r, v, val, n):
-    hist[k, 0] = _rowdot(L, ROW_T1, r)
-    hist[k, 1] = _rowdot(L, ROW_T2, r)
-    hist[k, 2] = val[TR_UB]
-    hist[k, 3] = val[TR_UC]
-    hist[k, 4] = val[TR_UT]
-    hist[k, 5] = val[TR_AB]
-    hist[k, 6] = val[TR_AC]
-    hist[k, 7] = val[TR_AT]
-    hist[k, 8] = ist[I_FAM] * 10 + (1 if ist[I_S] > 0 else 2)
-    for i in range(n):
-        hist[k, 9 + i] = r[i]
-        hist[k, 9 + n + i] = v[i]
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", inline='always')
@@ -1339,27 +1105,615 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
     return m_taylor
 
 
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _peaks_event(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
+                 MG, r, v, a0, beta, H, n):
+    """:func:`_peaks_over` up to an event (off the hot path: one compiled copy)."""
+    return _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC,
+                       MR, MG, r, v, a0, beta, H, n)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _record(hist, k, L, N, ist, r, v, val, nfull):
+    """One row of the histories: tilts, displacements, accelerations, pattern and the
+    support-reduced coordinates r = N y and their rates."""
+    hist[k, 0] = _rowdot(L, ROW_T1, r)
+    hist[k, 1] = _rowdot(L, ROW_T2, r)
+    hist[k, 2] = val[TR_UB]
+    hist[k, 3] = val[TR_UC]
+    hist[k, 4] = val[TR_UT]
+    hist[k, 5] = val[TR_AB]
+    hist[k, 6] = val[TR_AC]
+    hist[k, 7] = val[TR_AT]
+    hist[k, 8] = ist[I_FAM] * 10 + (1 if ist[I_S] > 0 else 2)
+    for i in range(nfull):
+        hist[k, 9 + i] = _rowdot(N, i, r)
+        hist[k, 9 + nfull + i] = _rowdot(N, i, v)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, hist,
+           want_hist, evlog):
+    """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
+
+    geo: the held states' watch rows, coordinate maps, inverse masses, rotation masks,
+    sizes and tracker rows (:func:`geometry`); pieces: the piece tables (:class:`Tables`);
+    work: scratch arrays. Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist,
+    hist[k, :] at every grid point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t,
+    pattern, then r, r_d). Returns a status code; ST_NEED_PIECE (with the piece in
+    outs[O_NEED]) when a piece's tables are missing (the caller builds them, runs again).
+
+    Compiled without numba's reference counting (``_nrt=False``): it never allocates."""
+    GL, GN, GX, GMI, GROT, GNN, GTR = geo
+    ready, nsub, mats, vecs, prop, pvec, REL = pieces
+    (D, cf, ist, rows, vrows, agc, sig, kap, kind, tgt, e_a, ed_a, e_b, ed_b, RT, RVT, AGT,
+     KP, OPN, val_a, der_a, val_b, der_b, r, v, rb, vb, sacc, sjerk, tmp, counts) = work
+    nfull = 3 - int(P[P_RIGID_B]) - int(P[P_RIGID_T])
+    N = ag.shape[0]
+    nsteps = N - 1 + ntail
+    g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
+    v_rest = g_open / dt
+    # start: at rest, family 2, provisional sides against the first ground motion
+    first = 0.0
+    for k in range(N):
+        if ag[k] != 0.0:
+            first = ag[k]
+            break
+    ist[I_S] = -1 if first > 0 else 1
+    ist[I_C] = -ist[I_S]
+    ist[I_FAM] = 2
+    ist[I_BOPEN] = JOINT_CLOSED
+    ist[I_COPEN] = JOINT_CLOSED
+    ist[I_BL] = 0
+    ist[I_BU] = 0
+    ist[I_BLA] = 0
+    ist[I_H] = HELD_NONE
+    for i in range(NP):
+        r[i] = 0.0
+        v[i] = 0.0
+    for i in range(3):
+        counts[i] = 0
+    for t in range(N_TRACK):
+        peaks[t] = 0.0
+    for k in range(N_OUT):
+        outs[k] = 0.0
+    outs[O_COLLAPSE_T] = np.nan
+    status = ST_OK
+    fam1_time = 0.0
+    n_events = 0
+    n_sub = 0
+    n_series = 0
+    t_end = nsteps * dt
+    h = HELD_NONE
+    n = GNN[h]
+    L = GL[h]
+    TR = GTR[h, ist[I_FAM] - 1]
+    mid = mode_index(h, ist[I_FAM], ist[I_BL], ist[I_BU], ist[I_BLA])
+    if not ready[mid]:
+        outs[O_NEED] = mid
+        return ST_NEED_PIECE
+    ne = active_events(P, L, REL[mid], ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
+    rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
+    MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], \
+        prop[mid], pvec[mid]
+    a_now = ag[0] if N > 0 else 0.0
+    beta0 = (ag[1] - ag[0]) / dt if N > 1 else 0.0
+    _events_now(RT, KP, r, v, e_a, ed_a)
+    _point(MK, MC, MR, MG, TR, r, v, a_now, beta0, val_a, der_a, sacc, sjerk)
+    for t in range(N_TRACK):
+        peaks[t] = max(peaks[t], abs(val_a[t]))
+    if want_hist:
+        _record(hist, 0, L, GN[h], ist, r, v, val_a, nfull)
+    duration = t_end
+    done = False
+    beta_prev = beta0
+    for step in range(nsteps):
+        if step < N - 1:
+            alpha = ag[step]
+            beta = (ag[step + 1] - ag[step]) / dt
+        else:
+            alpha = 0.0
+            beta = 0.0
+        t0 = step * dt
+        tau = 0.0
+        ev_here = 0
+        # the rates of the absolute accelerations jump with the slope of the record:
+        # d(rate)/d(beta) = 1 - row . M^-1 G (values and other rates are continuous);
+        # so do the rates of release functions (their ground term)
+        if step > 0:
+            dbeta = beta - beta_prev
+            for t in range(N_DISP, N_TRACK):
+                der_a[t] += dbeta * (1.0 - _rowdot(TR, t, MG))
+            if rel:
+                for k in range(MAX_EV):
+                    ed_a[k] += AGT[k] * dbeta
+        beta_prev = beta
+        while True:
+            ns = nsub[mid]
+            h_sub = dt
+            tb = dt
+            if ns > 1:
+                h_sub = dt / ns
+                # end of this sub-step: the next multiple of h_sub (the step end at most)
+                j = int(math.floor(tau / h_sub + 1e-9)) + 1
+                if j < ns:
+                    tb = j * h_sub
+            H = tb - tau
+            if H <= 1e-15 * dt:
+                break
+            n_sub += 1
+            a0 = alpha + beta * tau
+            full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
+            m_taylor = 0
+            if full:
+                _propagate(E, PV, r, v, a0, beta, rb, vb, n)
+            else:
+                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
+                _sum_state(D, m_taylor, 1.0, H, rb, vb)
+            _events_at(RT, KP, rb, vb, e_b, ed_b, n)
+            if rel:
+                _events_rel(RVT, AGT, MK, MC, MR, MG, rb, vb, alpha + beta * tb, beta, e_b,
+                            ed_b)
+            # earliest event on [tau, tb]
+            s_ev = 2.0
+            k_ev = -1
+            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b) else 0):
+                opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
+                release = kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE
+                crossing = e_a[k] > 0.0 and e_b[k] <= 0.0
+                # started on (or just behind) zero moving inward, and ends at or behind
+                # it again: it rose and fell back (after an impact, a merged impact)
+                rebound = e_a[k] <= 0.0 and ed_a[k] > 0.0 and e_b[k] <= 0.0
+                dip = False
+                if opening:
+                    # a tiny threshold (g_open) can be crossed and recrossed within a
+                    # sub-step, with zero rate at the start (at rest): scan the series
+                    dip = not crossing and e_a[k] > 0.0
+                elif not crossing and e_a[k] > 0.0 and e_b[k] > 0.0 and ed_a[k] < 0.0 \
+                        and ed_b[k] > 0.0 and min(e_a[k], e_b[k]) - (4.0 / 27.0) * H * (
+                            ed_b[k] - ed_a[k]) < 0.25 * max(e_a[k], e_b[k]):
+                    # (the Hermite cubic stays above min(ends) - 4/27 (|m0| + |m1|))
+                    lo, hi, slo, shi = _hermite_ext(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
+                    dip = lo < 0.25 * max(e_a[k], e_b[k])
+                if not (crossing or dip or rebound):
+                    continue
+                if m_taylor == 0:
+                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
+                if release:
+                    mc = _release_poly(rows, vrows, agc, k, D, m_taylor, H, a0, beta, sig[k],
+                                       kap[k], cf)
+                else:
+                    mc = _scalar_poly(rows, k, D, m_taylor, False, H, 0.0, 0.0, sig[k],
+                                      kap[k], cf)
+                s_lo = 0.0
+                s_hi = 1.0
+                if rebound:
+                    s_lo = _positive_max(cf, mc)
+                    if s_lo < 0.0 or s_lo >= s_ev:
+                        continue
+                if dip:
+                    if opening and _lower_bound(cf, mc) > 0.0:
+                        continue  # e(s) >= c0 - sum|c_j| > 0 on [0, 1]: no crossing
+                    # the exact first point where e <= 0 on the sub-step, if any
+                    s_hi = _first_nonpositive(cf, mc, ed_a[k] < 0.0 and not opening)
+                    if s_hi > 1.0:
+                        continue
+                if s_hi > s_ev:
+                    # only an earlier root matters: has e already crossed at s_ev?
+                    if _peval(cf, mc, s_ev)[0] > 0.0:
+                        continue
+                    s_hi = s_ev
+                tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
+                if crossing and s_hi == 1.0:
+                    guess = _hermite_root(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
+                else:
+                    guess = 0.5 * (s_lo + s_hi)
+                lo_, hi_ = _root(cf, mc, s_lo, s_hi, tol, guess)
+                s_root = hi_  # the side where the event function has crossed
+                if s_root < s_ev or k_ev < 0:
+                    s_ev = s_root
+                    k_ev = k
+            if k_ev < 0:
+                # no event: peaks over the sub-step, then advance
+                _point_fast(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b,
+                            sacc, sjerk, n)
+                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, 1.0, m_taylor, D,
+                                       cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
+                if m_taylor:
+                    n_series += 1
+                if ist[I_FAM] == 1:
+                    fam1_time += H
+                tau = tb
+                for i in range(NP):
+                    r[i] = rb[i]
+                    v[i] = vb[i]
+                for t in range(N_TRACK):
+                    val_a[t] = val_b[t]
+                    der_a[t] = der_b[t]
+                for k in range(MAX_EV):
+                    e_a[k] = e_b[k]
+                    ed_a[k] = ed_b[k]
+                if tb >= dt:
+                    break
+                continue
+            # ---- an event at tau + s_ev*H ----
+            n_series += 1
+            if m_taylor == 0:
+                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
+            He = s_ev * H
+            _sum_state(D, m_taylor, s_ev, H, rb, vb)
+            te_loc = tau + He
+            _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b, sacc,
+                   sjerk)
+            if He > 0.0:
+                # peaks on [tau, te], the one-sided values before the event included
+                _peaks_event(TR, peaks, val_a, der_a, val_b, der_b, s_ev, m_taylor, D, cf, MK,
+                             MC, MR, MG, r, v, a0, beta, H, n)
+            if ist[I_FAM] == 1:
+                fam1_time += He
+            tau = te_loc
+            for i in range(NP):
+                r[i] = rb[i]
+                v[i] = vb[i]
+            # handle this event and every other one due at the same instant
+            while k_ev >= 0:
+                if n_events < evlog.shape[0]:
+                    evlog[n_events, 0] = t0 + tau
+                    evlog[n_events, 1] = kind[k_ev]
+                    evlog[n_events, 2] = tgt[k_ev]
+                n_events += 1
+                ev_here += 1
+                if ev_here > MAX_EVENTS_PER_STEP:
+                    status = ST_EVENT_LIMIT
+                    break
+                code = handle_event(P, GL, GX, GMI, GROT, ist, kind[k_ev], tgt[k_ev], r, v,
+                                    cor, law, window, alpha + beta * tau, MK, MC, MR, MG,
+                                    v_rest, counts, tmp)
+                if n_events <= evlog.shape[0]:  # the pattern after the event
+                    evlog[n_events - 1, 3] = ist[I_FAM] * 10 + (1 if ist[I_S] > 0 else 2)
+                if code == 1:
+                    peaks[TR_RL] = 1.0
+                elif code == 2:
+                    peaks[TR_RU] = 1.0
+                if code != 0:
+                    status = ST_COLLAPSED
+                    break
+                # new piece
+                h = ist[I_H]
+                n = GNN[h]
+                L = GL[h]
+                TR = GTR[h, ist[I_FAM] - 1]
+                mid = mode_index(h, ist[I_FAM], ist[I_BL], ist[I_BU], ist[I_BLA])
+                if not ready[mid]:
+                    outs[O_NEED] = mid
+                    status = ST_NEED_PIECE
+                    break
+                ne = active_events(P, L, REL[mid], ist, g_open, rows, vrows, agc, sig, kap,
+                                   kind, tgt)
+                rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
+                MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], \
+                    vecs[mid, 1], prop[mid], pvec[mid]
+                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc,
+                       sjerk)
+                for t in range(N_TRACK):  # the one-sided values after the event
+                    peaks[t] = max(peaks[t], abs(val_a[t]))
+                _events_now(RT, KP, r, v, e_a, ed_a)
+                if rel:
+                    _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, alpha + beta * tau, beta, e_a,
+                                ed_a)
+                # a boundary reached at the same instant and moving outward fires now; a
+                # held joint whose release test is already positive is released now
+                k_ev = -1
+                for k in range(ne):
+                    if kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE:
+                        now = e_a[k] < 0.0 or (e_a[k] == 0.0 and ed_a[k] < 0.0)
+                    else:
+                        now = e_a[k] <= 0.0 and ed_a[k] < 0.0
+                    if now:
+                        k_ev = k
+                        break
+            if status == ST_NEED_PIECE:
+                return status
+            if status != ST_OK:
+                done = True
+                duration = t0 + tau
+                if status == ST_COLLAPSED:
+                    outs[O_COLLAPSE_T] = t0 + tau
+                break
+        if done:
+            break
+        if step == N - 2:
+            # the record ends: the right-hand limit of the absolute accelerations (xg_dd = 0)
+            _point(MK, MC, MR, MG, TR, r, v, 0.0, 0.0, val_b, der_b, sacc, sjerk)
+            for t in range(N_DISP, N_TRACK):
+                peaks[t] = max(peaks[t], abs(val_b[t]))
+        if want_hist:
+            a_grid = ag[step + 1] if step + 1 < N else 0.0
+            _point(MK, MC, MR, MG, TR, r, v, a_grid, 0.0, val_b, der_b, sacc, sjerk)
+            _record(hist, step + 1, L, GN[h], ist, r, v, val_b, nfull)
+    if status == ST_COLLAPSED:
+        peaks[TR_RL] = min(peaks[TR_RL], 1.0)
+        peaks[TR_RU] = min(peaks[TR_RU], 1.0)
+    outs[O_FAM1_TIME] = fam1_time
+    outs[O_DURATION] = duration
+    outs[O_BASE_IMP] = counts[0]
+    outs[O_CRACK_IMP] = counts[1]
+    outs[O_HOLDS] = counts[2]
+    outs[O_EVENTS] = n_events
+    outs[O_SUBSTEPS] = n_sub
+    outs[O_SERIES] = n_series
+    return status
+
+
+# ---- tables (numpy): held-state geometry and piece modes ---------------------------------
+
+def _pad(x: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    out = np.zeros(shape)
+    out[tuple(slice(0, s) for s in x.shape)] = x
+    return out
+
+
+def watch_rows(P: np.ndarray, held: int = HELD_NONE) -> np.ndarray:
+    """Rows over the padded coordinates y of a held state of theta1, theta2, u_b, u_c, u_t,
+    g_crack. Outputs fixed by a constraint get exactly zero rows (MODEL.md section 6)."""
+    a1, a2 = P[P_A1], P[P_A2]
+    Lq = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [a1, 0.0, 1.0],
+                   [a1, a2, 1.0], [-1.0, 1.0, 0.0]])
+    L = _pad(Lq @ transform(P, held), (6, NP))
+    if P[P_RIGID_B] > 0.5:
+        L[ROW_UB, :] = 0.0
+    if P[P_RIGID_T] > 0.5:
+        L[ROW_UT, :] = 0.0
+    return L
+
+
+def tracker_rows(P: np.ndarray, L: np.ndarray, fam: int) -> np.ndarray:
+    """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
+    a1, a2 = P[P_A1], P[P_A2]
+    th0l = curve(P, lower_case(fam))[1]
+    th01 = curve(P, 1)[1]
+    return np.array([L[ROW_UB], L[ROW_UC], L[ROW_UT], a1 * L[ROW_T1], a2 * L[ROW_T2],
+                     L[ROW_T1] / th0l, L[ROW_T2] / th01, L[ROW_UB], L[ROW_UC], L[ROW_UT]])
+
+
+def geometry(P: np.ndarray) -> tuple:
+    """Per held state h (none, base, crack, both): watch rows GL, the map GN from its
+    coordinates y to the support-reduced r, the maps GX[h, h'] between held states, the
+    inverse reduced masses GMI per family, the rotation masks GROT (the scale law), the
+    number of coordinates GNN and the tracker rows GTR per family."""
+    n = n_dof(P)
+    GL = np.zeros((4, 6, NP))
+    GN = np.zeros((4, NP, NP))
+    GS = np.zeros((4, NP, NP))
+    GMI = np.zeros((4, 2, NP, NP))
+    GROT = np.zeros((4, NP))
+    GNN = np.zeros(4, np.int64)
+    GTR = np.zeros((4, 2, N_TRACK, NP))
+    free_ub = P[P_RIGID_B] < 0.5 and P[P_RIGID_T] < 0.5
+    from .model import full_mass
+    for h in range(4):
+        T = transform(P, h)
+        ny = T.shape[1]
+        N = held_map(P, h)
+        GNN[h] = ny
+        GL[h] = watch_rows(P, h)
+        GN[h, :n, :ny] = N
+        GS[h, :ny, :n] = np.linalg.pinv(N) if ny else np.zeros((0, n))
+        GROT[h, :ny - (1 if free_ub else 0)] = 1.0
+        for fam in (1, 2):
+            if ny:
+                GMI[h, fam - 1, :ny, :ny] = np.linalg.inv(T.T @ full_mass(P, fam) @ T)
+            GTR[h, fam - 1] = tracker_rows(P, GL[h], fam)
+    GX = np.einsum("bij,ajk->abik", GS, GN)
+    return (GL, GN, GX, GMI, GROT, GNN, GTR)
+
+
+def _reachable(P: np.ndarray) -> list[tuple[int, int, int, int, int]]:
+    """The pieces a wall can reach: every (family, lower, upper) branch pair with no joint
+    held; a held base joint (theta1 = 0) with every upper branch; both held; and with a
+    held crack joint (theta2 = theta1) the branch triples met along theta1."""
+    if n_dof(P) == 1:  # both supports rigid: one coordinate, held or not
+        holds = [HELD_NONE, HELD_BOTH]
+    else:
+        holds = [HELD_NONE, HELD_BASE, HELD_CRACK, HELD_BOTH]
+    keys = []
+    for h in holds:
+        for fam in (1, 2):
+            if h == HELD_NONE:
+                keys += [(h, fam, bl, bu, 0) for bl in range(-2, 3) for bu in range(-2, 3)]
+            elif h == HELD_BASE:
+                keys += [(h, fam, 0, bu, 0) for bu in range(-2, 3)]
+            elif h == HELD_BOTH:
+                keys.append((h, fam, 0, 0, 0))
+            else:
+                cases = (lower_case(fam), 1, lower_case(3 - fam))
+                bounds = sorted({s * curve(P, c)[i] for c in cases for i in (3, 4)
+                                 for s in (1.0, -1.0)})
+                pts = [bounds[0] - 1.0, bounds[-1] + 1.0]
+                pts += [0.5 * (a + b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+                for x in pts:
+                    bl, bu, bla = (classify(P, c, x, 0.0) for c in cases)
+                    keys.append((h, fam, bl, bu, bla))
+    return list(dict.fromkeys(keys))
+
+
+def _expm(Z: np.ndarray) -> np.ndarray:
+    """Matrix exponentials of a stack of small matrices: scaling, a Taylor series of 24
+    terms (|Z|/2^s <= 0.5, truncation below 1e-25), squaring."""
+    norm = np.abs(Z).sum(axis=-1).max(axis=-1)
+    s = np.maximum(0, np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.5))).astype(int)
+    Zs = Z / (2.0 ** s)[:, None, None]
+    out = np.broadcast_to(np.eye(Z.shape[-1]), Z.shape).copy()
+    term = out.copy()
+    for k in range(1, 25):
+        term = term @ Zs / k
+        out = out + term
+    for i in range(Z.shape[0]):
+        for _ in range(s[i]):
+            out[i] = out[i] @ out[i]
+    return out
+
+
+class Tables:
+    """Everything the kernel needs for one wall at one record step, built once and kept:
+    the held-state geometry, the piece tables (filled for the reachable pieces), and the
+    work arrays of :func:`_march`."""
+
+    def __init__(self, wall: Wall, dt: float):
+        P = wall.params
+        self.P = P
+        self.dt = float(dt)
+        self.nfull = n_dof(P)
+        self.geo = geometry(P)
+        self.ready = np.zeros(NPIECE, np.bool_)
+        self.nsub = np.ones(NPIECE, np.int64)
+        self.mats = np.zeros((NPIECE, 2, NP, NP))
+        self.vecs = np.zeros((NPIECE, 2, NP))
+        self.prop = np.zeros((NPIECE, 2 * NP, 2 * NP))
+        self.pvec = np.zeros((NPIECE, 3, 2 * NP))
+        self.rel = np.zeros((NPIECE, 2, 2, REL_W))
+        self.pieces = (self.ready, self.nsub, self.mats, self.vecs, self.prop, self.pvec,
+                       self.rel)
+        self._free: dict = {}
+        self.build(_reachable(P))
+        f8 = np.float64
+        self.work = (
+            np.zeros((KMAX, NP)), np.zeros(KMAX), np.zeros(N_IST, np.int64),
+            np.zeros((MAX_EV, NP)), np.zeros((MAX_EV, NP)), np.zeros(MAX_EV),
+            np.zeros(MAX_EV), np.zeros(MAX_EV), np.zeros(MAX_EV, np.int64),
+            np.zeros(MAX_EV, np.int64),
+            np.zeros(MAX_EV), np.zeros(MAX_EV), np.zeros(MAX_EV), np.zeros(MAX_EV),
+            np.zeros((NP, MAX_EV)), np.zeros((NP, MAX_EV)), np.zeros(MAX_EV, f8),
+            np.zeros(MAX_EV), np.zeros(MAX_EV),
+            np.zeros(N_TRACK), np.zeros(N_TRACK), np.zeros(N_TRACK), np.zeros(N_TRACK),
+            np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP),
+            np.zeros(NP), np.zeros(NP), np.zeros(3, np.int64))
+
+    def _free_system(self, fam: int, bl: int, bu: int):
+        """(Minv, C, K, R0, MinvG) of the support-reduced system with no joint held."""
+        key = (fam, bl, bu)
+        if key not in self._free:
+            M, C, K, R0, MinvG, Minv = system(self.P, fam, bl, bu, HELD_NONE)
+            self._free[key] = (Minv, C, K, R0, MinvG)
+        return self._free[key]
+
+    def build(self, keys) -> None:
+        """Fill the tables of the given pieces (h, fam, bl, bu, bla)."""
+        P, dt = self.P, self.dt
+        groups: dict[int, list] = {}
+        for key in keys:
+            h, fam, bl, bu, bla = key
+            mid = mode_index(h, fam, bl, bu, bla)
+            M, C, K, R0, MinvG, Minv = system(P, fam, bl, bu, h)
+            ny = M.shape[0]
+            MK, MC, MR = Minv @ K, Minv @ C, Minv @ R0
+            self.mats[mid, 0] = _pad(MK, (NP, NP))
+            self.mats[mid, 1] = _pad(MC, (NP, NP))
+            self.vecs[mid, 0] = _pad(MR, (NP,))
+            self.vecs[mid, 1] = _pad(MinvG, (NP,))
+            if h != HELD_NONE:
+                self.rel[mid] = self._release_rows(h, fam, bl, bu, bla)
+            groups.setdefault(ny, []).append((mid, MK, MC, MR, MinvG))
+        for ny, items in groups.items():
+            self._propagators(ny, items, dt)
+        for key in keys:
+            self.ready[mode_index(*key)] = True
+
+    def _release_rows(self, h, fam, bl, bu, bla) -> np.ndarray:
+        """Unconstrained acceleration of each held joint's gap under each family, as rows
+        on y and y_d, a ground coefficient and a constant (MODEL.md section 4)."""
+        P = self.P
+        n = self.nfull
+        Lr = watch_rows(P, HELD_NONE)[:, :n]
+        N = held_map(P, h)
+        out = np.zeros((2, 2, REL_W))
+        for f in (1, 2):
+            bl_f = bl if f == fam else bla
+            if h in (HELD_BASE, HELD_BOTH):
+                bl_f = 0
+            Minv, C, K, R0, MinvG = self._free_system(f, bl_f, 0 if h == HELD_BOTH else bu)
+            for which, lrow in ((0, ROW_T1), (1, ROW_GC)):
+                J = Lr[lrow] @ Minv
+                ny = N.shape[1]
+                out[which, f - 1, :ny] = -J @ K @ N
+                out[which, f - 1, NP:NP + ny] = -J @ C @ N
+                out[which, f - 1, 2 * NP] = -Lr[lrow] @ MinvG
+                out[which, f - 1, 2 * NP + 1] = -J @ R0
+        return out
+
+    def _propagators(self, ny: int, items: list, dt: float) -> None:
+        """Sub-step count and exact propagator of pieces with ny coordinates: one matrix
+        exponential of [[A, c_R, c_G, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]] (A the
+        first-order matrix, c_R and c_G the resistance and ground columns) gives the
+        state transition and the responses to the constant, ramp and resistance forcing."""
+        m = 2 * ny
+        npc = len(items)
+        A = np.zeros((npc, m, m))
+        Z = np.zeros((npc, m + 3, m + 3))
+        for i, (_mid, MK, MC, MR, MG) in enumerate(items):
+            A[i, :ny, ny:] = np.eye(ny)
+            A[i, ny:, :ny] = -MK
+            A[i, ny:, ny:] = -MC
+            Z[i, :m, :m] = A[i]
+            Z[i, ny:m, m] = -MR
+            Z[i, ny:m, m + 1] = -MG
+            Z[i, m + 1, m + 2] = 1.0
+        nu = np.abs(np.linalg.eigvals(A)).max(axis=-1) if m else np.zeros(npc)
+        ns = np.maximum(1, np.ceil(nu * dt / RHO)).astype(np.int64)
+        hs = dt / ns
+        # balanced: rates scaled by the sub-step (z = [y, h y_d]), so that |Z h| is about
+        # (nu h)^2 <= 1 even for stiff springs (few squarings, no loss of accuracy)
+        scale = np.ones((npc, m + 3))
+        scale[:, ny:m] = hs[:, None]
+        X = _expm(Z * hs[:, None, None] * scale[:, :, None] / scale[:, None, :])
+        X = X / scale[:, :, None] * scale[:, None, :]
+        idx = np.r_[np.arange(ny), NP + np.arange(ny)]
+        for i, (mid, *_) in enumerate(items):
+            self.nsub[mid] = ns[i]
+            self.prop[mid] = 0.0
+            self.prop[mid][np.ix_(idx, idx)] = X[i, :m, :m]
+            self.pvec[mid] = 0.0
+            for which in range(3):
+                self.pvec[mid, which, idx] = X[i, :m, m + which]
+
+
 # ---- the Python entry point -------------------------------------------------------------
 
 _TABLES: OrderedDict = OrderedDict()
 _TABLES_MAX = 128
 
 
-def _tables(wall: Wall, dt: float):
-    """Mode tables of a wall at a record step, filled lazily by the kernel and kept for
-    the next analysis of the same wall (studies run each wall many times)."""
+def tables(wall: Wall, dt: float) -> Tables:
+    """The kernel's tables of a wall at a record step, kept for the next analysis of the
+    same wall (studies and collapse searches run each wall many times)."""
     key = (wall.params.tobytes(), float(dt))
     tab = _TABLES.get(key)
     if tab is None:
-        tab = (np.zeros(NMODES, np.bool_), np.zeros(NMODES, np.int64),
-               np.zeros((NMODES, 2, NP, NP)), np.zeros((NMODES, 2, NP)),
-               np.zeros((NMODES, 2 * NP, 2 * NP)), np.zeros((NMODES, 3, 2 * NP)))
+        tab = Tables(wall, dt)
         _TABLES[key] = tab
         if len(_TABLES) > _TABLES_MAX:
             _TABLES.popitem(last=False)
     else:
         _TABLES.move_to_end(key)
     return tab
+
+
+_COMPILED = False
+
+
+def _announce_compile() -> float | None:
+    """On the first analysis of a process, say so when the compiled kernel is not in the
+    cache yet (it then takes a while); returns the start time to report the duration."""
+    global _COMPILED
+    if _COMPILED:
+        return None
+    _COMPILED = True
+    if _jit.is_compiled("_march"):
+        return None
+    sys.stderr.write("urmx: compiling the kernel (once per install; cached in "
+                     f"{_jit.cache_dir()}) ...\n")
+    sys.stderr.flush()
+    return time.perf_counter()
 
 
 def warm_up() -> None:
@@ -1372,7 +1726,7 @@ def warm_up() -> None:
 
 
 def clear_cache() -> None:
-    """Forget the cached mode tables (benchmarks measure cold runs with it)."""
+    """Forget the cached tables (benchmarks measure cold runs with it)."""
     _TABLES.clear()
 
 
@@ -1448,6 +1802,7 @@ def _scalars(peaks, outs, status):
         "status": STATUS[status],
         "duration": duration,
         "events": int(out[O_EVENTS]),
+        "holds": int(out[O_HOLDS]),
         "substeps": int(out[O_SUBSTEPS]),
         "series": int(out[O_SERIES]),
     }
@@ -1455,7 +1810,7 @@ def _scalars(peaks, outs, status):
 
 
 _NO_HIST = np.full((1, 9 + 2 * NP), np.nan)
-_NO_LOG = np.zeros((0, 3))
+_NO_LOG = np.zeros((0, 4))
 
 
 def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: float = 0.8,
@@ -1483,26 +1838,39 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
         Merged-impact window w. [s]
     history : bool
         Also return the histories on the record grid under ``"history"``.
+    max_log : int
+        Keep the first `max_log` events as ``"event_log"`` rows: time [s], kind (an index
+        of ``EVENT_NAMES``), target (a side or branch) and the pattern after the event
+        (11, 12, 21 or 22).
 
     Returns
     -------
     dict
         The scalars of ``urmx.variables.SCALARS`` as floats/ints, ``status`` ("ok",
-        "collapsed" or "event-limit"), ``duration`` (analysed, s) and ``events``.
+        "collapsed" or "event-limit"), ``duration`` (analysed, s), ``events`` and
+        ``holds`` (joints held closed after an impact).
     """
     ag, dt, ntail, law = check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail,
                                       window)
-    P = wall.params
-    n = int(n_dof(P))
+    tab = tables(wall, dt)
+    n = tab.nfull
     N = ag.size
-    ready, nsub, mats, vecs, prop, pvec = _tables(wall, dt)
     peaks = np.zeros(N_TRACK)
     outs = np.zeros(N_OUT)
     # without history or a log the kernel never writes them: shared placeholders
     hist = np.full((N + ntail, 9 + 2 * n), np.nan) if history else _NO_HIST
-    evlog = np.zeros((max_log, 3)) if max_log else _NO_LOG
-    status = _integrate(P, ag, dt, ntail, float(cor), law, float(window), ready, nsub, mats,
-                        vecs, prop, pvec, peaks, outs, hist, bool(history), evlog)
+    evlog = np.zeros((max_log, 4)) if max_log else _NO_LOG
+    started = _announce_compile()
+    while True:
+        status = _march(tab.P, ag, dt, ntail, float(cor), law, float(window), tab.geo,
+                        tab.pieces, tab.work, peaks, outs, hist, bool(history), evlog)
+        if status != ST_NEED_PIECE:
+            break
+        tab.build([piece_key(int(outs[O_NEED]))])  # not foreseen as reachable: add, rerun
+        if history:
+            hist[:] = np.nan
+    if started is not None:
+        sys.stderr.write(f"urmx: kernel compiled in {time.perf_counter() - started:.1f} s\n")
     res = _scalars(peaks, outs, status)
     if history:
         res["history"] = history_dict(hist, dt, n)

@@ -19,6 +19,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from . import _jit  # noqa: F401  (the cache locator, before any @njit below)
+
 G = 9.81  # m/s2, the value the paper's Table III uses (MODEL.md section 1)
 RIGID = "rigid"
 
@@ -210,7 +212,9 @@ def _pack(w: Wall) -> np.ndarray:
     return p
 
 
-# ---- numba builders shared by the kernel and the reference solver ----------------------
+# ---- builders shared by the kernel and the reference solver ----------------------------
+# The few functions the integration loop calls at events are compiled (numba); the
+# matrices of the pieces are built once per wall in numpy (they are not in any loop).
 
 @njit(cache=True)
 def lower_case(family):
@@ -223,49 +227,6 @@ def curve(P, case):
     """(M0, theta0, Mi, theta_a, theta_b) of a segment case."""
     i = P_CASE + 5 * (case - 1)
     return P[i], P[i + 1], P[i + 2], P[i + 3], P[i + 4]
-
-
-@njit(cache=True)
-def branch_coeffs(P, case, branch):
-    """Resistance on a signed branch as R = k*theta + r0, each branch continued smoothly.
-
-    branch 0: |theta| <= theta_a (slope Mi/theta_a); +-1: plateau +-Mi;
-    +-2: softening M0*sign*(1 - |theta|/theta0), slope -M0/theta0 (the paper's K_G).
-    """
-    M0, theta0, Mi, ta, tb = curve(P, case)
-    if branch == 0:
-        return Mi / ta, 0.0
-    sgn = 1.0 if branch > 0 else -1.0
-    if abs(branch) == 1:
-        return 0.0, sgn * Mi
-    return -M0 / theta0, sgn * M0
-
-
-@njit(cache=True)
-def resistance(P, case, theta):
-    """Trilinear resistance R(theta) (MODEL.md section 3). [N m]"""
-    M0, theta0, Mi, ta, tb = curve(P, case)
-    a = abs(theta)
-    s = 1.0 if theta >= 0 else -1.0
-    if a <= ta:
-        return Mi * theta / ta
-    if a <= tb:
-        return s * Mi
-    return s * M0 * (1.0 - a / theta0)
-
-
-@njit(cache=True)
-def potential(P, case, theta):
-    """Strain energy of the trilinear curve, integral of R from 0 to theta. [J]"""
-    M0, theta0, Mi, ta, tb = curve(P, case)
-    a = abs(theta)
-    if a <= ta:
-        return 0.5 * Mi * a * a / ta
-    e = 0.5 * Mi * ta
-    if a <= tb:
-        return e + Mi * (a - ta)
-    e += Mi * (tb - ta)
-    return e + M0 * ((a - tb) - 0.5 * (a * a - tb * tb) / theta0)
 
 
 @njit(cache=True)
@@ -285,14 +246,53 @@ def classify(P, case, theta, rate):
     return 2 * s
 
 
-@njit(cache=True)
+def _curve(P, case):
+    i = P_CASE + 5 * (case - 1)
+    return tuple(float(x) for x in P[i:i + 5])
+
+
+def branch_coeffs(P, case, branch):
+    """Resistance on a signed branch as R = k*theta + r0, each branch continued smoothly.
+
+    branch 0: |theta| <= theta_a (slope Mi/theta_a); +-1: plateau +-Mi;
+    +-2: softening M0*sign*(1 - |theta|/theta0), slope -M0/theta0 (the paper's K_G).
+    """
+    M0, theta0, Mi, ta, tb = _curve(P, case)
+    if branch == 0:
+        return Mi / ta, 0.0
+    sgn = 1.0 if branch > 0 else -1.0
+    if abs(branch) == 1:
+        return 0.0, sgn * Mi
+    return -M0 / theta0, sgn * M0
+
+
+def potential(P, case, theta):
+    """Strain energy of the trilinear curve, integral of R from 0 to theta. [J]"""
+    M0, theta0, Mi, ta, tb = _curve(P, case)
+    a = abs(theta)
+    if a <= ta:
+        return 0.5 * Mi * a * a / ta
+    e = 0.5 * Mi * ta
+    if a <= tb:
+        return e + Mi * (a - ta)
+    e += Mi * (tb - ta)
+    return e + M0 * ((a - tb) - 0.5 * (a * a - tb * tb) / theta0)
+
+
 def n_dof(P):
+    """Number of reduced coordinates of the support case (MODEL.md section 6)."""
     return 3 - int(P[P_RIGID_B]) - int(P[P_RIGID_T])
 
 
-@njit(cache=True)
-def transform(P):
-    """q = T r for the support case (MODEL.md section 6 table)."""
+# held joints (MODEL.md section 4): none, the base joint, the crack joint, both
+HELD_NONE, HELD_BASE, HELD_CRACK, HELD_BOTH = 0, 1, 2, 3
+
+
+def transform(P, held=HELD_NONE):
+    """q = T r for the support case (MODEL.md section 6 table), times the constraint of
+    the held joints (section 4): a held base joint removes theta1 (theta1 = 0), a held
+    crack joint merges theta2 into theta1 (theta2 = theta1), one coordinate fewer each.
+    With both supports rigid the two joints are one coordinate: any hold removes it."""
     rb = P[P_RIGID_B] > 0.5
     rt = P[P_RIGID_T] > 0.5
     a1, a2 = P[P_A1], P[P_A2]
@@ -309,10 +309,26 @@ def transform(P):
     else:
         T[0, 0] = 1.0
         T[1, 0] = -a1 / a2
-    return T
+    return T @ held_map(P, held)
 
 
-@njit(cache=True)
+def held_map(P, held):
+    """r = N y: the support-reduced coordinates r from the coordinates y of a held state."""
+    n = n_dof(P)
+    if n == 1:
+        return np.eye(1) if held == HELD_NONE else np.zeros((1, 0))
+    eye = np.eye(n)
+    if held == HELD_NONE:
+        return eye
+    if held == HELD_BASE:
+        return eye[:, 1:]
+    if held == HELD_CRACK:
+        N = eye[:, [0] + list(range(2, n))]
+        N[1, 0] = 1.0
+        return N
+    return eye[:, 2:]
+
+
 def full_mass(P, family):
     """M_f of Eq. 1 (family 1) or Eq. 2 (family 2), with M13 from the Lagrangian (sec. 9)."""
     b, a1, a2 = P[P_B], P[P_A1], P[P_A2]
@@ -336,15 +352,16 @@ def full_mass(P, family):
     return M
 
 
-@njit(cache=True)
-def system(P, family, bl, bu):
-    """Reduced matrices of one piece (family, lower branch, upper branch).
+def system(P, family, bl, bu, held=HELD_NONE):
+    """Reduced matrices of one piece (family, lower branch, upper branch, held joints).
 
     Returns M, C, K, R0, MinvG, Minv with the reduced equation
-    ``M r_dd + C r_d + K r + R0 = -G xg_dd`` (G = T^T M_f[:, 2]) and MinvG = M^-1 G.
-    With both supports flexible MinvG is e3 exactly (MODEL.md section 5).
+    ``M y_dd + C y_d + K y + R0 = -G xg_dd`` (G = T^T M_f[:, 2], T of :func:`transform`)
+    and MinvG = M^-1 G. While u_b is a free coordinate (both supports flexible) MinvG is
+    its unit vector exactly (MODEL.md section 5: the ground drives u_b alone).
     """
-    T = transform(P)
+    T = transform(P, held)
+    n = T.shape[1]
     a1, a2 = P[P_A1], P[P_A2]
     Mf = full_mass(P, family)
     v = np.array([a1, a2, 1.0])
@@ -356,15 +373,16 @@ def system(P, family, bl, bu):
     KD[0, 0] += k1
     KD[1, 1] += k2
     R0q = np.array([r1, r2, 0.0])
-    Tt = np.ascontiguousarray(T.T)
-    M = Tt @ Mf @ T
-    C = Tt @ Cq @ T
-    K = Tt @ KD @ T
-    R0 = Tt @ R0q
-    Gv = Tt @ np.ascontiguousarray(Mf[:, 2])
-    Minv = np.linalg.inv(M)
-    if T.shape[1] == 3:
-        MinvG = e3.copy()
+    M = T.T @ Mf @ T
+    C = T.T @ Cq @ T
+    K = T.T @ KD @ T
+    R0 = T.T @ R0q
+    Gv = T.T @ Mf[:, 2]
+    Minv = np.linalg.inv(M) if n else np.zeros((0, 0))
+    free_ub = P[P_RIGID_B] < 0.5 and P[P_RIGID_T] < 0.5
+    if free_ub:
+        MinvG = np.zeros(n)
+        MinvG[n - 1] = 1.0  # u_b is the last coordinate of every held state
     else:
         MinvG = Minv @ Gv
     return M, C, K, R0, MinvG, Minv

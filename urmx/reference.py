@@ -7,7 +7,8 @@ found by ``solve_ivp``'s event location, and the state at an event is obtained b
 fresh integration *to* the event time, not from the interpolant. Interior extrema of
 the peak outputs are events too (their rates crossing zero). What an event does is
 decided by the same functions as in the exact kernel (:func:`urmx.kernel.handle_event`,
-:func:`urmx.kernel.active_events`), so the two solvers differ only in how they integrate.
+:func:`urmx.kernel.active_events`), on the same piece matrices
+(:func:`urmx.kernel.tables`), so the two solvers differ only in how they integrate.
 """
 
 from __future__ import annotations
@@ -16,25 +17,6 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from . import kernel as K
-from .model import n_dof, system
-
-
-def _mode(P, ist, cache):
-    """(M^-1 K, M^-1 C, M^-1 R0, M^-1 G) of the piece, and the same padded to
-    urmx.kernel.NP coordinates for the shared numba event functions."""
-    key = (int(ist[K.I_FAM]), int(ist[K.I_BL]), int(ist[K.I_BU]))
-    if key not in cache:
-        M, C, Kmat, R0, MinvG, Minv = system(P, *key)
-        mode = (Minv @ Kmat, Minv @ C, Minv @ R0, MinvG)
-        cache[key] = mode, tuple(_pad(x) for x in mode)
-    return cache[key]
-
-
-def _pad(x):
-    """A vector or square matrix padded with zeros to urmx.kernel.NP coordinates."""
-    out = np.zeros((K.NP,) * x.ndim)
-    out[tuple(slice(0, s) for s in x.shape)] = x
-    return out
 
 
 def _rhs(MK, MC, MR, MG, alpha, beta, n):
@@ -45,10 +27,11 @@ def _rhs(MK, MC, MR, MG, alpha, beta, n):
     return rhs
 
 
-def _event(row, sig, kap, n):
-    """Terminal event e = sig*(row . r) + kap falling through zero (urmx.kernel's form)."""
+def _event(row, vrow, agc, sig, kap, alpha, beta, n):
+    """Terminal event e = sig*(row.y + vrow.y_d + agc*xg_dd) + kap falling through zero
+    (urmx.kernel's form)."""
     def ev(t, x):
-        return sig * (row @ x[:n]) + kap
+        return sig * (row @ x[:n] + vrow @ x[n:2 * n] + agc * (alpha + beta * t)) + kap
     ev.terminal = True
     ev.direction = -1
     return ev
@@ -93,9 +76,10 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                                         tail, window)
     if not (rtol and 0.0 < float(rtol) < 1.0):
         raise ValueError(f"rtol={rtol!r} must lie in (0, 1)")
-    P = wall.params
-    n = int(n_dof(P))
-    L = K.watch_rows(P)  # padded rows (the shared event functions use them)
+    tab = K.tables(wall, dt)
+    P = tab.P
+    GL, GN, GX, GMI, GROT, GNN, GTR = tab.geo
+    nfull = tab.nfull
     N = ag.size
     nsteps = N - 1 + ntail
     g_open = K.G_OPEN_FACTOR * wall.segment(2).theta_a
@@ -103,32 +87,40 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     if atol is None:
         atol = rtol * 1e-3 * wall.segment(2).theta_a
     max_step = dt / 8.0 if max_step is None else float(max_step)
-    cache: dict = {}
-    Minv_fam = K.mass_inverses(P, law)
-    TRp = np.zeros((K.N_TRACK, K.NP))
-    TR = TRp[:, :n]  # a view: tracker_rows fills TRp
     rows = np.zeros((K.MAX_EV, K.NP))
+    vrows = np.zeros((K.MAX_EV, K.NP))
+    agc = np.zeros(K.MAX_EV)
     sig = np.zeros(K.MAX_EV)
     kap = np.zeros(K.MAX_EV)
     kind = np.zeros(K.MAX_EV, np.int64)
     tgt = np.zeros(K.MAX_EV, np.int64)
+    tmp = np.zeros(K.NP)
     ist = np.zeros(K.N_IST, np.int64)
     nz = np.flatnonzero(ag)
     ist[K.I_S] = -1 if (nz.size and ag[nz[0]] > 0) else 1
     ist[K.I_C] = -ist[K.I_S]
     ist[K.I_FAM] = 2
-    counts = np.zeros(2, np.int64)
+    counts = np.zeros(3, np.int64)
     peaks = np.zeros(K.N_TRACK)
-    r = np.zeros(n)
-    v = np.zeros(n)
     status = K.ST_OK
     collapse_time = np.nan
     fam1 = 0.0
     events = 0
     log = []
-    hist = np.full((N + ntail if history else 1, 9 + 2 * n), np.nan)
+    hist = np.full((N + ntail if history else 1, 9 + 2 * nfull), np.nan)
 
-    def tracker_values(mode, r, v, a, b):
+    def piece():
+        """(n, mid, mode over y, padded mode, tracker rows, watch rows) of the piece."""
+        h = int(ist[K.I_H])
+        mid = K.mode_index(h, ist[K.I_FAM], ist[K.I_BL], ist[K.I_BU], ist[K.I_BLA])
+        if not tab.ready[mid]:
+            tab.build([K.piece_key(mid)])
+        n = int(GNN[h])
+        padded = (tab.mats[mid, 0], tab.mats[mid, 1], tab.vecs[mid, 0], tab.vecs[mid, 1])
+        mode = (padded[0][:n, :n], padded[1][:n, :n], padded[2][:n], padded[3][:n])
+        return n, mid, mode, padded, GTR[h, ist[K.I_FAM] - 1][:, :n], GL[h]
+
+    def tracker_values(mode, TR, r, v, a, b):
         MK, MC, MR, MG = mode
         acc = -MK @ r - MC @ v - MR - MG * a
         jerk = -MK @ v - MC @ acc - MG * b
@@ -139,13 +131,26 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     def bump(val):
         np.maximum(peaks, np.abs(val), out=peaks)
 
-    K.tracker_rows(P, L, ist[K.I_FAM], TRp)
-    mode, _ = _mode(P, ist, cache)
+    def record(k, r, v, a):
+        n, mid, mode, padded, TR, L = piece()
+        val, _ = tracker_values(mode, TR, r, v, a, 0.0)
+        K._record(hist, k, L, GN[ist[K.I_H]], ist, _pad(r), _pad(v), val, nfull)
+
+    def event_values(ne, n, r, v, a, b, mode):
+        MK, MC, MR, MG = mode
+        acc = -MK @ r - MC @ v - MR - MG * a
+        e = sig[:ne] * (rows[:ne, :n] @ r + vrows[:ne, :n] @ v + agc[:ne] * a) + kap[:ne]
+        ed = sig[:ne] * (rows[:ne, :n] @ v + vrows[:ne, :n] @ acc + agc[:ne] * b)
+        return e, ed
+
+    n, mid, mode, padded, TR, L = piece()
+    r = np.zeros(n)
+    v = np.zeros(n)
     b0 = (ag[1] - ag[0]) / dt
-    val, _ = tracker_values(mode, r, v, ag[0], b0)
+    val, _ = tracker_values(mode, TR, r, v, ag[0], b0)
     bump(val)
     if history:
-        K._record(hist, 0, L, ist, _pad(r), _pad(v), val, n)
+        record(0, r, v, ag[0])
     duration = nsteps * dt
     for step in range(nsteps):
         alpha, beta = (ag[step], (ag[step + 1] - ag[step]) / dt) if step < N - 1 else (0., 0.)
@@ -153,16 +158,22 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         tau = 0.0
         ev_here = 0
         while tau < dt and status == K.ST_OK:
-            mode, padded = _mode(P, ist, cache)
+            n, mid, mode, padded, TR, L = piece()
             MK, MC, MR, MG = mode
-            ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-
+            ne = K.active_events(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig, kap,
+                                 kind, tgt)
             rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
-            evfuns = [_event(rows[k, :n].copy(), sig[k], kap[k], n) for k in range(ne)]
+            evfuns = [_event(rows[k, :n].copy(), vrows[k, :n].copy(), agc[k], sig[k], kap[k],
+                             alpha, beta, n) for k in range(ne)]
             for t_ in range(K.N_TRACK):
                 if TR[t_].any():
                     evfuns.append(_extremum(TR[t_].copy(), t_, mode, alpha, beta, n))
             x0 = np.concatenate([r, v])
+            if n == 0:  # nothing moves (both joints held): events follow the ground alone
+                x0 = np.zeros(1)
+
+                def rhs(t, x):
+                    return np.zeros(1)
             sol = solve_ivp(rhs, (tau, dt), x0, method=method, rtol=rtol, atol=atol,
                             events=evfuns, max_step=max_step)
             # interior extrema (non-terminal events) up to the end of this piece
@@ -173,29 +184,30 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
             for k in range(ne, len(evfuns)):
                 for te, ye in zip(sol.t_events[k], sol.y_events[k], strict=True):
                     if te <= t_stop:
-                        val, _ = tracker_values(mode, ye[:n], ye[n:], alpha + beta * te, beta)
+                        val, _ = tracker_values(mode, TR, ye[:n], ye[n:2 * n], alpha + beta * te,
+                                                beta)
                         peaks[evfuns[k].tracker] = max(peaks[evfuns[k].tracker],
                                                        abs(val[evfuns[k].tracker]))
             hit = [k for k in range(ne) if sol.t_events[k].size]
             if not hit:
-                r, v = sol.y[:n, -1].copy(), sol.y[n:, -1].copy()
+                r, v = sol.y[:n, -1].copy(), sol.y[n:2 * n, -1].copy()
                 if ist[K.I_FAM] == 1:
                     fam1 += dt - tau
                 tau = dt
-                val, _ = tracker_values(mode, r, v, alpha + beta * tau, beta)
+                val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
                 bump(val)
                 break
             k_ev = min(hit, key=lambda k: sol.t_events[k][0])
             te = float(sol.t_events[k_ev][0])
             # step to the event (an interpolated state is less accurate)
-            if te > tau:
+            if te > tau and n:
                 s2 = solve_ivp(rhs, (tau, te), x0, method=method, rtol=rtol, atol=atol,
                                max_step=max_step)
-                r, v = s2.y[:n, -1].copy(), s2.y[n:, -1].copy()
+                r, v = s2.y[:n, -1].copy(), s2.y[n:2 * n, -1].copy()
             if ist[K.I_FAM] == 1:
                 fam1 += te - tau
             tau = te
-            val, _ = tracker_values(mode, r, v, alpha + beta * tau, beta)
+            val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
             bump(val)
             while k_ev >= 0:
                 log.append((t0 + tau, kind[k_ev], tgt[k_ev]))
@@ -205,35 +217,35 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                     status = K.ST_EVENT_LIMIT
                     break
                 rp, vp = _pad(r), _pad(v)
-                code = K.handle_event(P, L, ist, kind[k_ev], tgt[k_ev], rp, vp, float(cor), law,
-                                      float(window), alpha + beta * tau, *padded, Minv_fam,
-                                      v_rest, counts)
-                v = vp[:n].copy()
+                code = K.handle_event(P, GL, GX, GMI, GROT, ist, kind[k_ev], tgt[k_ev], rp, vp,
+                                      float(cor), law, float(window), alpha + beta * tau,
+                                      *padded, v_rest, counts, tmp)
+                log[-1] = (*log[-1], ist[K.I_FAM] * 10 + (1 if ist[K.I_S] > 0 else 2))
                 if code:
                     peaks[K.TR_RL if code == 1 else K.TR_RU] = 1.0
                     status = K.ST_COLLAPSED
                     collapse_time = t0 + tau
                     break
-                K.tracker_rows(P, L, ist[K.I_FAM], TRp)
-                mode, padded = _mode(P, ist, cache)
-                MK, MC, MR, MG = mode
-                val, _ = tracker_values(mode, r, v, alpha + beta * tau, beta)
+                n, mid, mode, padded, TR, L = piece()
+                r, v = rp[:n].copy(), vp[:n].copy()
+                val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
                 bump(val)
-                ne = K.active_events(P, L, ist, g_open, rows, sig, kap, kind, tgt)
-                e = sig[:ne] * (rows[:ne, :n] @ r) + kap[:ne]
-                ed = sig[:ne] * (rows[:ne, :n] @ v)
-                now = np.flatnonzero((e <= 0.0) & (ed < 0.0))
+                ne = K.active_events(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig,
+                                     kap, kind, tgt)
+                e, ed = event_values(ne, n, r, v, alpha + beta * tau, beta, mode)
+                release = (kind[:ne] == K.EV_BASE_RELEASE) | (kind[:ne] == K.EV_CRACK_RELEASE)
+                now = np.flatnonzero(np.where(release, (e < 0.0) | ((e == 0.0) & (ed < 0.0)),
+                                              (e <= 0.0) & (ed < 0.0)))
                 k_ev = int(now[0]) if now.size else -1
         if status != K.ST_OK:
             duration = t0 + tau
             break
         if step == N - 2:
-            val, _ = tracker_values(_mode(P, ist, cache)[0], r, v, 0.0, 0.0)
+            n, mid, mode, padded, TR, L = piece()
+            val, _ = tracker_values(mode, TR, r, v, 0.0, 0.0)
             np.maximum(peaks[K.N_DISP:], np.abs(val[K.N_DISP:]), out=peaks[K.N_DISP:])
         if history:
-            a_grid = ag[step + 1] if step + 1 < N else 0.0
-            val, _ = tracker_values(_mode(P, ist, cache)[0], r, v, a_grid, 0.0)
-            K._record(hist, step + 1, L, ist, _pad(r), _pad(v), val, n)
+            record(step + 1, r, v, ag[step + 1] if step + 1 < N else 0.0)
     if status == K.ST_COLLAPSED:
         peaks[K.TR_RL] = min(peaks[K.TR_RL], 1.0)
         peaks[K.TR_RU] = min(peaks[K.TR_RU], 1.0)
@@ -241,10 +253,17 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     outs[K.O_COLLAPSE_T] = collapse_time
     outs[K.O_FAM1_TIME] = fam1
     outs[K.O_DURATION] = duration
-    outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP] = counts
+    outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP], outs[K.O_HOLDS] = counts
     outs[K.O_EVENTS] = events
     res = K._scalars(peaks, outs, status)
     if history:
-        res["history"] = K.history_dict(hist, dt, n)
-    res["event_log"] = np.array(log).reshape(-1, 3)
+        res["history"] = K.history_dict(hist, dt, nfull)
+    res["event_log"] = np.array([row + (0,) * (4 - len(row)) for row in log]).reshape(-1, 4)
     return res
+
+
+def _pad(x):
+    """A vector padded with zeros to urmx.kernel.NP coordinates."""
+    out = np.zeros(K.NP)
+    out[:x.size] = x
+    return out

@@ -17,7 +17,12 @@ first started, so a resumed run writes the same archive as an uninterrupted one.
 Schedulers: ``None`` (default) starts a local ``dask.distributed`` cluster of worker
 processes, one per core (the numba kernel holds the GIL, so processes beat threads);
 ``"threads"`` the same with threads; ``"serial"`` runs in this process; any other string is a
-scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it is.
+scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it is
+(:func:`local_client` starts one on this machine, :func:`close_client` stops it).
+
+:func:`run_study` reads a study file, resolves its records and writes the archive;
+:func:`run_grid` runs a grid built in code on records given in memory, with no archive
+(benchmarks); :func:`batch_tasks` lists the batches both hand to :func:`run_batch`.
 """
 
 from __future__ import annotations
@@ -177,6 +182,31 @@ def _task(study: Study, batch: Batch, records: dict[str, RecordData],
                                ).hexdigest()[:20]
     return task
 
+
+def batch_tasks(study: Study, records: dict[str, RecordData], batch_size: int = 16,
+                kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
+    """The batches of a study grid, each with the task a worker runs (:func:`run_batch`).
+
+    Parameters
+    ----------
+    study : Study
+        The grid.
+    records : dict of RecordData
+        The study's records by id (:func:`resolve_records`).
+    batch_size : int
+        Target number of analyses per batch (walls are grouped to reach it). [1]
+    kernel : callable, optional
+        Integrator with the signature of `urmx.kernel.run` (default).
+
+    Returns
+    -------
+    list of (Batch, dict)
+        Each batch (its ``key`` set to a hash of everything that decides its result) and
+        its task: plain Python and numpy values, picklable, no xarray.
+    """
+    return [(b, _task(study, b, records, kernel)) for b in _batches(study, batch_size)]
+
+
 def _unrun(shape) -> dict[str, np.ndarray]:
     """Output arrays of cells not (yet) run: NaN, INT_FILL for integers, status not_run."""
     out: dict[str, np.ndarray] = {}
@@ -260,24 +290,55 @@ class _Progress:
         sys.stderr.flush()
 
 
-def _client(scheduler: Any):
-    """(client, owned) for a scheduler argument."""
+def local_client(n_workers: int | None = None, threads: bool = False):
+    """A ``distributed.Client`` on a new local cluster.
+
+    Parameters
+    ----------
+    n_workers : int, optional
+        Worker processes of one thread each (default: one per core). The numba kernel
+        holds the GIL, so processes beat threads; the kernel is compiled (or loaded from
+        numba's cache) here first, so the workers load it from the cache.
+    threads : bool
+        One worker in this process with `n_workers` threads instead.
+
+    Returns
+    -------
+    distributed.Client
+        Close it with :func:`close_client`, which also stops the cluster.
+    """
     from distributed import Client, LocalCluster
+
+    n = n_workers or os.cpu_count() or 1
+    if not threads:
+        from .kernel import warm_up
+
+        warm_up()
+    cluster = LocalCluster(n_workers=1 if threads else n, threads_per_worker=n if threads else 1,
+                           processes=not threads, dashboard_address=":0")
+    return Client(cluster)
+
+
+def get_client(scheduler: Any) -> tuple[Any, bool]:
+    """(client, owned) for a `scheduler` argument of :func:`run_study`: a Client is used as
+    it is (owned False); None or "processes" start local worker processes, "threads" a
+    threaded local worker, any other string connects to that scheduler address (owned True:
+    the caller closes it with :func:`close_client`)."""
+    from distributed import Client
 
     if isinstance(scheduler, Client):
         return scheduler, False
     if scheduler in (None, "processes", "threads"):
-        processes = scheduler != "threads"
-        if processes:
-            from .kernel import warm_up
-
-            warm_up()  # compile once here; the workers then load numba's cache
-        n = os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n if processes else 1,
-                               threads_per_worker=1 if processes else n,
-                               processes=processes, dashboard_address=":0")
-        return Client(cluster), True
+        return local_client(threads=scheduler == "threads"), True
     return Client(scheduler), True
+
+
+def close_client(client: Any) -> None:
+    """Close a client and the local cluster it started, if any."""
+    cluster = getattr(client, "cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
 
 
 def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], rec_ids: list[str],
@@ -288,7 +349,7 @@ def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], re
         return
     from distributed import as_completed
 
-    client, owned = _client(scheduler)
+    client, owned = get_client(scheduler)
     futures = {}
     try:
         acc = {rid: client.scatter(records[rid].acceleration, broadcast=True)
@@ -303,10 +364,45 @@ def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], re
         if owned:
             for f, _ in futures.values():
                 f.cancel()
-            cluster = getattr(client, "cluster", None)
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            close_client(client)
+
+
+def run_grid(study: Study, records: dict[str, RecordData], scheduler: Any = "serial", *,
+             batch_size: int = 16, kernel: Callable | None = None,
+             command: str | None = None) -> xr.Dataset:
+    """Run a study grid in memory: the batches, the scheduler and the Dataset assembly of
+    :func:`run_study`, without its archive (nothing kept on disk, no resume) and with the
+    records given rather than resolved from the manifest.
+
+    Parameters
+    ----------
+    study : Study
+        The grid (e.g. built in code rather than read from a file).
+    records : dict of RecordData
+        Every record the study names, by id.
+    scheduler : "serial", None, "threads", address or distributed.Client
+        As for :func:`run_study` (default here: this process).
+    batch_size : int
+        Target number of analyses per batch. [1]
+    kernel : callable, optional
+        Integrator with the signature of `urmx.kernel.run` (default).
+    command : str, optional
+        Command line for the ``history`` attribute.
+
+    Returns
+    -------
+    xarray.Dataset
+        The same Dataset :func:`run_study` returns.
+    """
+    tasks = batch_tasks(study, records, batch_size, kernel)
+    results: dict[str, dict[str, np.ndarray]] = {}
+
+    def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
+        results[batch.key] = result
+
+    started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
+    _compute(tasks, records, study.records, scheduler, on_result)
+    return _assemble(study, records, tasks, results, started, command)
 
 
 def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None = None,
@@ -342,8 +438,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     if not isinstance(study, Study):
         study = load_study(study)
     records = resolve_records(study, records_dir)
-    batches = _batches(study, batch_size)
-    tasks = [(b, _task(study, b, records, kernel)) for b in batches]
+    tasks = batch_tasks(study, records, batch_size, kernel)
     parts = None
     results: dict[str, dict[str, np.ndarray]] = {}
     started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()

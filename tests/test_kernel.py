@@ -13,7 +13,11 @@ import time
 
 import numpy as np
 import pytest
-from kernel_helpers import (
+
+from urmx import kernel, model, reference
+from urmx.variables import SCALARS
+
+from .kernel_helpers import (
     C9,
     SCALAR_PEAKS,
     SUPPORTS,
@@ -25,9 +29,6 @@ from kernel_helpers import (
     nahanni,
     worst_peak_difference,
 )
-
-from urmx import kernel, model, reference
-from urmx.variables import SCALARS
 
 EV_BASE_IMPACT, EV_CRACK_IMPACT = 0, 1
 MIRROR_PATTERN = {11: 12, 12: 11, 21: 22, 22: 21, 0: 0}  # 0: after a stop

@@ -45,51 +45,11 @@ import xarray as xr
 
 from . import variables
 from .catalog import SPECIMEN, Study, load_study
+from .netcdf import write_netcdf
 
 STATUS = ("ok", "collapsed", "event-limit", "not-run")  # flag values 0, 1, 2, 3
 NOT_RUN = STATUS.index("not-run")
 INT_FILL = -1  # integer outputs of cells a study's pairs leave out
-
-# attributes of the coordinates (the variable registry covers the kernel's outputs)
-COORDS: dict[str, dict[str, str]] = {
-    "wall": {"long_name": "wall id"},
-    "slenderness": {"units": "1", "long_name": "wall slenderness h/b"},
-    "height": {"units": "m", "long_name": "wall height"},
-    "thickness": {"units": "m", "long_name": "wall thickness"},
-    "mass": {"units": "kg", "long_name": "wall mass (effective for building walls)"},
-    "crack_ratio": {"units": "1", "long_name": "crack height over wall height"},
-    "pmr": {"units": "%", "long_name": "percentage of maximum rigid resistance"},
-    "diaphragm": {"long_name": "diaphragm id"},
-    "stiffness": {"units": "N m-1", "long_name": "diaphragm stiffness",
-                  "comment": "inf: rigid support; NaN: each test wall's own supports"},
-    "frequency": {"units": "Hz", "long_name": "indicative diaphragm frequency",
-                  "comment": "Table IV footnote SDOF (stiffness over diaphragm mass plus half "
-                             "the wall mass) for the study's median wall; "
-                             "see cell_frequency for every wall"},
-    "cell_frequency": {"units": "Hz", "long_name": "indicative frequency of the top support",
-                       "comment": "Table IV footnote SDOF of each wall on each diaphragm"},
-    "diaphragm_mass": {"units": "kg", "long_name": "diaphragm effective mass"},
-    "diaphragm_damping": {"units": "1", "long_name": "diaphragm damping ratio"},
-    "record": {"long_name": "ground-motion record id"},
-    "pga": {"units": "m s-2", "long_name": "peak ground acceleration (unscaled record)"},
-    "scale_factor": {"units": "1", "long_name": "record scale factor"},
-    "scaled_pga": {"units": "m s-2", "long_name": "peak ground acceleration as analysed",
-                   "comment": "pga * scale_factor (times the scale dimension, if any)"},
-    "record_dt": {"units": "s", "long_name": "record time step"},
-    "cor": {"units": "1", "long_name": "coefficient of restitution"},
-    "scale": {"units": "1", "long_name": "extra scale on the record's scale factor"},
-    "impact": {"long_name": "impact law"},
-    "damping": {"units": "1", "long_name": "damping ratio of the flexible supports"},
-    "history": {"long_name": "cell with time histories"},
-    "history_wall": {"long_name": "wall of the history cell"},
-    "history_diaphragm": {"long_name": "diaphragm of the history cell"},
-    "history_record": {"long_name": "record of the history cell"},
-    "history_cor": {"units": "1", "long_name": "coefficient of restitution of the history cell"},
-    "history_dt": {"units": "s", "long_name": "record time step of the history cell",
-                   "comment": "histories of records with a coarser step than the time axis "
-                              "are linearly interpolated onto it (pattern: held)"},
-}
-
 
 # ---- records --------------------------------------------------------------------------------
 
@@ -470,7 +430,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     _compute(todo, records, study.records, scheduler, on_result)
     ds = _assemble(study, records, tasks, results, started, command)
     if out is not None:
-        write_archive(ds, out)
+        write_netcdf(ds, out)
         shutil.rmtree(parts, ignore_errors=True)
     return ds
 
@@ -478,7 +438,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
 # ---- the Dataset ----------------------------------------------------------------------------
 
 def _coord(name: str, dims: Any, values: Any) -> xr.Variable:
-    return xr.Variable(dims, values, attrs=dict(COORDS.get(name, {})))
+    return xr.Variable(dims, values, attrs=variables.attrs(name))
 
 
 def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Batch, dict]],
@@ -506,9 +466,8 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
 
     data_vars = {}
     for name, arr in data.items():
-        attrs = dict(variables.attrs(name))
+        attrs = variables.attrs(name)
         if name == "status":
-            attrs.pop("units", None)
             attrs["flag_values"] = np.arange(len(STATUS), dtype=np.int8)
             attrs["flag_meanings"] = " ".join(s.replace("-", "_") for s in STATUS)
         elif name in variables.INTEGER_SCALARS:
@@ -620,35 +579,6 @@ def _on_grid(time: np.ndarray, own: np.ndarray, values: np.ndarray, step: bool) 
         out[inside] = values[idx]
     else:
         out[inside] = np.interp(time[inside], own, values)
-    return out
-
-
-def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
-    """netCDF4 encoding per variable: compressed outputs, no fill value on coordinates."""
-    enc: dict[str, dict[str, Any]] = {}
-    for name, var in ds.variables.items():
-        if var.dtype == object:
-            enc[name] = {}
-        elif name in ds.coords:
-            enc[name] = {"_FillValue": None}
-        elif np.issubdtype(var.dtype, np.integer):
-            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
-        else:
-            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}
-    return enc
-
-
-def write_archive(ds: xr.Dataset, out: str | os.PathLike) -> Path:
-    """Write `ds` as netCDF4 to a temporary name beside `out` and rename it (atomic)."""
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    try:
-        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return out
 
 

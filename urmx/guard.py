@@ -1,14 +1,11 @@
 """The kernel regression guard behind ``urmx bench guard`` (run by ``.ci/run``, < 30 s).
 
-One measurement (:func:`measure`): the benchmark wall under El Centro x 0.5, the warm
-median time of `urmx.kernel.run` and its largest relative peak error against the scipy
-reference at ``rtol=1e-11``. One judgement (:func:`verdict`): it fails when the error
-exceeds `MAX_ERROR` or the time is more than `SLOWDOWN` times the figure stored for this
-machine class in ``benchmarks/baseline.toml``. To guard something more, add its figure to
-the dict :func:`measure` returns and its check to :func:`verdict`.
-
-The benchmark suite (``benchmarks/`` beside the package, ``python -m benchmarks``) builds
-its report from the same measuring helpers (:func:`median_time`, :func:`rel_error`).
+:func:`measure` times `urmx.kernel.run` on the benchmark wall under El Centro x 0.5 and
+takes its largest relative peak error against the scipy reference; :func:`verdict` fails
+when the error exceeds `MAX_ERROR` or the time is `SLOWDOWN` times the figure stored for
+this machine class in ``benchmarks/baseline.toml``. To guard more, add a figure to what
+:func:`measure` returns and its check to :func:`verdict`. The benchmark suite
+(``benchmarks/`` of the checkout) measures with the same helpers.
 """
 
 from __future__ import annotations
@@ -120,11 +117,11 @@ def cpu_model() -> str:
 
 def git_commit() -> str:
     """Short commit of the checkout, with ``(urmx/ modified)`` when the package differs."""
-    git = dict(cwd=project_root(), capture_output=True, text=True, timeout=10)
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=project_root(), capture_output=True,
+                              text=True, timeout=10).stdout.strip()
     try:
-        head = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], **git).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--", "urmx"],
-                               **git).stdout.strip()
+        head, dirty = git("rev-parse", "--short=12", "HEAD"), git("status", "--porcelain", "urmx")
     except (OSError, subprocess.SubprocessError):
         return "unknown"
     return (head or "unknown") + (" (urmx/ modified)" if dirty else "")

@@ -1,23 +1,21 @@
 """Walls, records and small helpers for ``tests/test_kernel.py`` (the kernel's physics tests).
 
 The Table II walls of the paper are taken literally (nominal masses, MODEL.md section 2).
-Records come from ``$URMX_RECORDS`` (default ``/work/shared/records``); tests that need
-them skip when the folder is missing.
+Records come from the records folder as every test finds it (`tests.fixtures.records`:
+``$URMX_RECORDS``); a test that needs a missing record fails under CI and skips elsewhere.
 """
 
 from __future__ import annotations
 
-import os
 from functools import cache
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 import urmx
 
+from .fixtures.records import record_file, records_folder
+
 G = 9.81
-RECORDS = Path(os.environ.get("URMX_RECORDS", "/work/shared/records"))
 
 SCALAR_PEAKS = (
     "peak_crack_displacement", "peak_top_displacement", "peak_base_displacement",
@@ -47,33 +45,27 @@ SUPPORTS = {
 }
 
 
-def _need(path: Path) -> Path:
-    if not path.is_file():
-        pytest.skip(f"record {path} missing (set URMX_RECORDS to the shared records folder)")
-    return path
-
-
 @cache
 def elcentro() -> tuple[np.ndarray, float]:
     """El Centro 1940 S00E, m/s2 (file: cm/s2, 6 values a line), dt 0.02 s."""
-    path = _need(RECORDS / "elcentro1940" / "elcentro_S00E_1940.dat")
+    path = record_file("elcentro1940/elcentro_S00E_1940.dat")
     return np.loadtxt(path).ravel() / 100.0, 0.02
 
 
 @cache
 def nahanni() -> tuple[np.ndarray, float]:
     """Nahanni 1985 Site 1, 010 deg, m/s2 (file: g, one column), dt 0.005 s."""
-    path = _need(RECORDS / "nahanni1985" / "NS1-010")
+    path = record_file("nahanni1985/NS1-010")
     return np.loadtxt(path) * G, 0.005
 
 
 @cache
 def bigbear() -> tuple[np.ndarray, float]:
     """Big Bear 1992, Hesperia (CDMG), the manifest's channel, m/s2."""
-    _need(RECORDS / "bigbear1992" / "ce23583r_HESPERIA.RAW")
+    record_file("bigbear1992/ce23583r_HESPERIA.RAW")
     import urmx.records
 
-    tr = urmx.records.load("bigbear", RECORDS)
+    tr = urmx.records.load("bigbear", records_folder())
     return np.asarray(tr.data, dtype=float), float(tr.stats.delta)
 
 

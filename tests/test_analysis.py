@@ -3,20 +3,11 @@
 import numpy as np
 import pytest
 import xarray as xr
-from fixtures.studies import multi_storey, single_storey, verification
 from numpy.testing import assert_allclose
 
 from urmx import analysis as A
 
-
-@pytest.fixture(scope="module")
-def single():
-    return single_storey()
-
-
-@pytest.fixture(scope="module")
-def multi():
-    return multi_storey()
+from .fixtures.studies import single_storey
 
 
 def test_rank_correlation_hand_computed():
@@ -137,8 +128,8 @@ def test_best_cor_nearest_and_nan_never_matches():
     assert out["best_cor"].attrs["units"] == "1"
 
 
-def test_cor_matches_uses_measured_and_paper_targets():
-    m = A.cor_matches(verification())
+def test_cor_matches_uses_measured_and_paper_targets(verif):
+    m = A.cor_matches(verif)
     assert_allclose(m["paper_best_cor"].values, [0.78, 0.83, 0.83])
     assert_allclose(m["best_cor"].sel(wall="west").values, [0.8, 0.8])
     # 0.01 + 0.1 (cor - 0.7) = 0.023 at cor 0.83, nearest grid 0.85 (0.025)

@@ -1,17 +1,29 @@
-"""Functional tests of urmx.bench at tiny sizes (structure, rendering, guard logic).
+"""The regression guard (`urmx.guard`) and the benchmark suite (``benchmarks/``) at tiny
+sizes: structure, rendering, the section registry and the guard's logic.
 
 No timing is asserted: the numbers depend on the machine and its load.
 """
 
 from __future__ import annotations
 
+import inspect
+import json
 import math
+import sys
+import types
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from urmx import bench
+import benchmarks
+from benchmarks import common, report
+from benchmarks.sections import SECTIONS, grid_scaling, kernel, work_precision
+from urmx import guard
 from urmx.cli import main
+from urmx.config import project_root
+
+PERFORMANCE = project_root() / "reports" / "performance.md"
 
 
 def _measured(**kw):
@@ -24,95 +36,98 @@ def _measured(**kw):
 
 def test_median_time_structure():
     calls = []
-    t = bench.median_time(lambda: calls.append(1), repeat=4, setup=lambda: None)
+    t = guard.median_time(lambda: calls.append(1), repeat=4, setup=lambda: None)
     assert set(t) == {"median", "min", "max", "repeats"}
     assert t["repeats"] == len(calls) == 4
     assert t["min"] <= t["median"] <= t["max"]
 
 
 def test_rel_error_handles_zero_and_inf():
-    ref = dict.fromkeys(bench.PEAKS, 2.0)
+    ref = dict.fromkeys(guard.PEAKS, 2.0)
     ref["peak_base_displacement"] = 0.0
     res = dict(ref, peak_top_displacement=2.2)
-    e = bench.rel_error(res, ref)
+    e = guard.rel_error(res, ref)
     assert e["worst"] == "peak_top_displacement"
     assert e["max"] == pytest.approx(0.1)
     assert e["each"]["peak_base_displacement"] == 0.0
-    assert bench.rel_error(dict(ref, peak_lower_drift=math.inf), ref)["max"] == math.inf
+    assert guard.rel_error(dict(ref, peak_lower_drift=math.inf), ref)["max"] == math.inf
 
 
 def test_fit_line_of_a_line():
-    f = bench._fit_line([10, 20, 40], [1.0, 2.0, 4.0])
+    f = common.fit_line([10, 20, 40], [1.0, 2.0, 4.0])
     assert f["slope"] == pytest.approx(0.1)
     assert f["r2"] == pytest.approx(1.0)
     assert f["loglog_slope"] == pytest.approx(1.0)
 
 
 def test_synthetic_record_and_walls():
-    ag = bench.synthetic_record(5.0, 0.01, pga=3.0)
+    ag = common.synthetic_record(5.0, 0.01, pga=3.0)
     assert ag.size == 501 and np.max(np.abs(ag)) == pytest.approx(3.0, rel=0.02)
-    w = bench.benchmark_wall()
+    w = guard.benchmark_wall()
     assert w.top_stiffness == 815e3 and w.bottom_rigid and w.pmr == 75.0
-    assert bench.slender12_wall().slenderness == pytest.approx(12.0)
-    assert set(bench.bench_walls()) == {"wall12", "west", "c9", "benchmark", "slender12-D3"}
+    assert common.slender12_wall().slenderness == pytest.approx(12.0)
+    assert set(common.bench_walls()) == {"wall12", "west", "c9", "benchmark", "slender12-D3"}
 
 
 def test_synthetic_grid_runs_through_the_study_layer():
-    study, records = bench.synthetic_study(1, 2, duration=0.5)
+    study, records = grid_scaling.synthetic_study(1, 2, duration=0.5)
     assert study.size == len(study.walls) * 5 * 1 * 2
-    ds, seconds = bench.run_grid(study, records, "serial")
+    ds, seconds = grid_scaling.timed_grid(study, records, "serial")
     assert seconds > 0
     assert dict(ds.sizes)["scale"] == 2 and "diaphragm" in ds.dims
     assert int((ds["status"] == 3).sum()) == 0  # every cell ran
-    bb = bench.batch_balance(study, records)
+    bb = grid_scaling.batch_balance(study, records)
     assert bb["count"] == 10  # 2 cells per wall: walls grouped 8 to a batch of 16, 2 per diaphragm
     assert 1.0 <= bb["best_speedup_2"] <= 2.0 and bb["largest"] <= bb["total"]
 
 
 def test_guard_verdict_logic():
     base = {"seconds": 0.001}
-    ok, msgs = bench.guard_verdict(_measured(seconds=0.0029), base)
+    ok, msgs = guard.verdict(_measured(seconds=0.0029), base)
     assert ok and any("2.90x" in m for m in msgs)
-    ok, msgs = bench.guard_verdict(_measured(seconds=0.0031), base)
+    ok, msgs = guard.verdict(_measured(seconds=0.0031), base)
     assert not ok and any(m.startswith("FAIL") and "slower" in m for m in msgs)
-    ok, msgs = bench.guard_verdict(_measured(error=2e-9), base)
+    ok, msgs = guard.verdict(_measured(error=2e-9), base)
     assert not ok and msgs[0].startswith("FAIL")
-    ok, msgs = bench.guard_verdict(_measured(seconds=1.0), None)  # unknown class: pass
+    ok, msgs = guard.verdict(_measured(error=math.nan), base)  # a NaN error is no pass
+    assert not ok and msgs[0].startswith("FAIL")
+    ok, msgs = guard.verdict(_measured(seconds=1.0), None)  # unknown class: pass
     assert ok and any("not judged" in m for m in msgs)
 
 
 def test_error_verdict_three_ways():
-    assert bench.error_verdict(1e-12, 2e-12, 1e-9, 1e-9) is True  # reference clearly worse
-    assert bench.error_verdict(1e-12, 4e-12, 1e-15, 2e-12) is None  # both within resolution
-    assert bench.error_verdict(1e-3, 1e-14, 1e-12, 1e-3) is False  # kernel off, not round-off
+    assert kernel.error_verdict(1e-12, 2e-12, 1e-9, 1e-9) is True  # reference clearly worse
+    assert kernel.error_verdict(1e-12, 4e-12, 1e-15, 2e-12) is None  # both within resolution
+    assert kernel.error_verdict(1e-3, 1e-14, 1e-12, 1e-3) is False  # kernel off, not round-off
 
 
 def test_baseline_round_trip_keeps_other_classes(tmp_path):
     path = tmp_path / "baseline.toml"
-    bench.write_baseline(path, "arm64-8cpu", {"seconds": 0.0002, "cpu": 'M1 "Pro"'})
-    bench.write_baseline(path, "x86_64-2cpu", {"seconds": 0.0005, "events": 590})
-    data = bench._read_baseline(path)
+    guard.write_baseline(path, "arm64-8cpu", {"seconds": 0.0002, "cpu": 'M1 "Pro"'})
+    guard.write_baseline(path, "x86_64-2cpu", {"seconds": 0.0005, "events": 590})
+    data = guard.read_baseline(path)
     assert data["arm64-8cpu"] == {"seconds": 0.0002, "cpu": 'M1 "Pro"'}
     assert data["x86_64-2cpu"]["events"] == 590
 
 
 def test_guard_with_a_fake_measurement(tmp_path, monkeypatch):
     path = tmp_path / "baseline.toml"
-    monkeypatch.setattr(bench, "guard_measure", lambda quick=False: _measured())
+    monkeypatch.setattr(guard, "measure", lambda quick=False: _measured())
     lines: list[str] = []
-    m = bench.guard(baseline_path=path, echo=lines.append)
+    m = guard.run(baseline_path=path, echo=lines.append)
     assert m["passed"] and m["baseline"] is None and "PASS" in lines[-1]
-    m = bench.guard(update=True, baseline_path=path, echo=lines.append)
+    m = guard.run(update=True, baseline_path=path, echo=lines.append)
     assert m["baseline"]["seconds"] == 0.001 and path.is_file()
-    monkeypatch.setattr(bench, "guard_measure", lambda quick=False: _measured(seconds=0.01))
+    monkeypatch.setattr(guard, "measure", lambda quick=False: _measured(seconds=0.01))
     assert main(["bench", "guard", "--baseline", str(path)]) == 1
-    monkeypatch.setattr(bench, "guard_measure", lambda quick=False: _measured(seconds=0.002))
+    monkeypatch.setattr(guard, "measure", lambda quick=False: _measured(seconds=0.002))
     assert main(["bench", "guard", "--baseline", str(path)]) == 0
 
 
 def _fake_sections():
-    info = bench.machine_info()
-    peaks = {"max": 1e-12, "worst": "peak_lower_drift", "each": dict.fromkeys(bench.PEAKS, 1e-12)}
+    info = common.machine_info()
+    peaks = {"max": 1e-12, "worst": "peak_lower_drift",
+             "each": dict.fromkeys(common.PEAKS, 1e-12)}
     kern = {"case": "benchmark", "samples": 2688, "dt": 0.02, "scale": 0.5, "events": 590,
             "status": "ok", "reference_events": 590,
             "warm": {"median": 4e-4, "repeats": 9}, "cold": {"median": 6e-4, "repeats": 9},
@@ -150,39 +165,101 @@ def _fake_sections():
         {"case": "zero input", "kernel_ms": 0.1, "events": 0, "status": "ok",
          "check": "max peak", "value": 0.0, "ok": True, "reference_s": 0.5,
          "reference_events": 0, "agreement": 0.0}]}
-    guard = dict(_measured(), passed=True, messages=["ok: fine"], baseline=None,
-                 guard_seconds=12.0)
+    guard_run = dict(_measured(), passed=True, messages=["ok: fine"], baseline=None,
+                     guard_seconds=12.0)
     data = {"kernel": kern, "work_precision": wp, "grid_scaling": grid, "hard_cases": hard,
-            "guard": guard}
+            "guard": guard_run}
     return {k: {"machine": info, "quick": k == "grid_scaling", "data": v}
             for k, v in data.items()}
 
 
 def test_render_markdown_from_fake_sections(tmp_path):
-    text = bench.render(_fake_sections())
+    text = benchmarks.render(_fake_sections())
     assert text.startswith("# Performance")
     for needle in ("## Machine", "## Targets", "## Kernel", "## Work-precision",
                    "## Grid scaling", "## Hard cases", "## Regression guard", "QUICK",
-                   "2500 /s warm", "**NOT MET**", "5000x"):
+                   "2500 /s warm", "**NOT MET**", "5000x",
+                   "| | | | | | no step cap | 0.001 / 0.05 s | 1e-07 / 0.1 s |"):
         assert needle in text, needle
-    assert bench.render({}).endswith("No measurements yet.\n")
+    assert "issue" not in text.lower()
+    assert benchmarks.render({}).endswith("No measurements yet.\n")
     # sections saved as JSON render into the report file
     folder = tmp_path / "performance"
     for name, s in _fake_sections().items():
-        bench.save_section(folder, name, s["data"], s["machine"], s["quick"])
-    out = bench.write_report(tmp_path / "performance.md")
-    assert "## Regression guard" in out.read_text()
+        report.save_section(folder, name, s["data"], s["machine"], s["quick"])
+    out = benchmarks.write_report(tmp_path / "performance.md")
+    assert out.read_text() == text
+
+
+def test_committed_report_is_its_saved_sections_rendered():
+    """reports/performance.md is exactly what its JSON sections render to: the report can
+    be rewritten (and extended) without measuring again."""
+    folder = PERFORMANCE.with_suffix("")
+    sections = benchmarks.load_sections(folder)
+    assert set(sections) == {p.stem for p in folder.glob("*.json")}  # all registered
+    assert benchmarks.render(sections, folder.name) == PERFORMANCE.read_text(encoding="utf-8")
+
+
+def test_every_section_follows_the_protocol():
+    names = [report.name(s) for s in SECTIONS]
+    assert len(set(names)) == len(names)
+    for s in SECTIONS:
+        assert callable(s.run) and callable(s.render), s.__name__
+        assert next(iter(inspect.signature(s.run).parameters)) == "quick"
+    assert report.resolve(["all"]) == ["kernel", "work_precision", "cost_growth",
+                                       "grid_scaling", "hard_cases", "guard"]
+    assert report.resolve(["all"], paper=True)[3:5] == ["grid_scaling", "paper"]
+    assert report.resolve(["records", "kernel", "cost_growth"]) == [
+        "work_precision", "cost_growth", "kernel"]
+    with pytest.raises(ValueError, match="unknown benchmark 'fast'"):
+        report.resolve(["fast"])
+
+
+def test_a_new_section_needs_only_its_module(tmp_path, monkeypatch):
+    """A section added to the registry is run, saved, rendered and summarised."""
+    extra = types.ModuleType("benchmarks.sections.startup")
+    extra.run = lambda quick: {"seconds": 1.5 if quick else 3.0}
+    extra.render = lambda d: ["## Start-up", "", f"{d['seconds']:g} s", ""]
+    extra.targets = lambda d: [["start-up < 2 s", f"{d['seconds']:g} s", "**met**"]]
+    monkeypatch.setattr(benchmarks.sections, "SECTIONS", [*SECTIONS, extra])
+    out = benchmarks.run(["startup"], tmp_path / "performance.md", quick=True)
+    saved = json.loads((tmp_path / "performance" / "startup.json").read_text())
+    assert saved["data"] == {"seconds": 1.5} and saved["quick"] is True
+    text = out.read_text()
+    assert "## Start-up\n\n1.5 s\n" in text and "| start-up < 2 s | 1.5 s | **met** |" in text
+    assert "startup" in report.resolve(["all"])
 
 
 def test_work_precision_figure(tmp_path):
     case = _fake_sections()["work_precision"]["data"]["cases"][0]
-    names = bench._plot_work_precision([case], tmp_path)
-    assert (tmp_path / names[0]).stat().st_size > 0
+    name = work_precision.plot_case(case, tmp_path)
+    assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_machine_info_keys():
-    info = bench.machine_info()
+    info = common.machine_info()
     for key in ("cpu", "cores", "ram_gb", "python", "numpy", "numba", "scipy", "dask",
                 "urmx", "commit", "date", "machine_class"):
         assert key in info
-    assert info["machine_class"] == bench.machine_class()
+    assert info["machine_class"] == guard.machine_class()
+
+
+def test_urmx_bench_uses_the_checkout_suite(tmp_path, capsys, monkeypatch):
+    assert main(["bench", "render", "--out", str(tmp_path / "perf.md")]) == 0
+    assert (tmp_path / "perf.md").read_text().endswith("No measurements yet.\n")
+    assert main(["bench", "kernel", "--update"]) == 2
+    assert "--update and --baseline apply to `urmx bench guard`" in capsys.readouterr().err
+    # an installed urmx without a checkout beside it: a clear error, not a traceback
+    import urmx.config
+
+    monkeypatch.setattr(urmx.config, "project_root", lambda: tmp_path)
+    monkeypatch.delitem(sys.modules, "benchmarks")
+    assert main(["bench", "render", "--out", str(tmp_path / "perf.md")]) == 2
+    err = capsys.readouterr().err
+    assert "benchmark suite is not installed with urmx" in err and "Traceback" not in err
+
+
+def test_guard_module_stays_small():
+    """The package keeps only the guard; the suite lives in benchmarks/."""
+    assert not (project_root() / "urmx" / "bench.py").exists()
+    assert len(Path(guard.__file__).read_text().splitlines()) < 250

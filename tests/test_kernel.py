@@ -1,4 +1,4 @@
-"""Physics tests of the exact event-driven kernel (issue 2 acceptance, MODEL.md 4-11).
+"""Physics tests of the exact event-driven kernel (MODEL.md sections 4-11).
 
 Every hard case of MODEL.md section 10 asserts numbers: rest, mirror symmetry, energy,
 simultaneous contacts, a 1e9 N/m spring, a collapse bracket, a long fine record, the
@@ -13,7 +13,10 @@ import time
 
 import numpy as np
 import pytest
-from kernel_helpers import (
+
+from urmx import kernel, model, reference
+
+from .kernel_helpers import (
     C9,
     SCALAR_PEAKS,
     SUPPORTS,
@@ -25,8 +28,6 @@ from kernel_helpers import (
     nahanni,
     worst_peak_difference,
 )
-
-from urmx import kernel, model, reference
 
 EV_BASE_IMPACT, EV_CRACK_IMPACT = 0, 1
 MIRROR_PATTERN = {11: 12, 12: 11, 21: 22, 22: 21, 0: 0}  # 0: after a stop

@@ -1,21 +1,11 @@
 """Each plot function draws the expected panels and lines (cheap artist checks)."""
 
-import matplotlib
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from fixtures.studies import multi_storey, single_storey, verification  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from urmx import analysis as A  # noqa: E402
-from urmx import plot as P  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def single():
-    return single_storey()
+from urmx import analysis as A
+from urmx import plot as P
 
 
 def test_label_from_attrs(single):
@@ -62,8 +52,8 @@ def test_given_axes_too_few_is_an_error(single):
         P.plot_peak_profiles(A.peak_profiles(single), axes=[Figure().subplots()])
 
 
-def test_resonance_bands_and_markers():
-    res = A.resonance(multi_storey())
+def test_resonance_bands_and_markers(multi):
+    res = A.resonance(multi)
     ax = P.plot_resonance(res)
     assert len(ax.collections) == 6  # a band and a marker set per record
     offsets = ax.collections[1].get_offsets()
@@ -79,8 +69,8 @@ def test_resonance_places_rigid_diaphragm_at_right_edge(single):
     assert np.isfinite(x).all() and x[-1] > x[:-1].max()
 
 
-def test_cor_match_lines_target_and_paper_cor():
-    ds = verification()
+def test_cor_match_lines_target_and_paper_cor(verif):
+    ds = verif
     da = A.select(ds["collapse_time"].sel(wall="west"), keep=("record", "cor"))
     da = da.squeeze("diaphragm", drop=True).reset_coords(drop=True)
     ax = P.plot_cor_match(da, target=5.3, paper_cor=0.83)

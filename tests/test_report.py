@@ -1,13 +1,9 @@
 """write_report and `urmx report` on small synthetic archives."""
 
-import matplotlib
+from urmx.cli import main
+from urmx.report import study_kind, write_report
 
-matplotlib.use("Agg")
-
-from fixtures.studies import multi_storey, single_storey, verification  # noqa: E402
-
-from urmx.cli import main  # noqa: E402
-from urmx.report import study_kind, write_report  # noqa: E402
+from .fixtures.studies import multi_storey, single_storey, verification
 
 FIGURES = ["fig6_peak_acceleration.png", "fig7_peak_displacement.png", "fig8_histories.png",
            "fig9_stability_single.png", "fig10_stability_multi.png", "resonance_multi.png",

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import re
 from pathlib import Path
 
@@ -13,27 +12,32 @@ import xarray as xr
 
 import urmx
 from urmx import Wall
+from urmx.catalog import read_wall
 from urmx.cli import main
-from urmx.simulation import read_wall, write_netcdf
+from urmx.netcdf import write_netcdf
 from urmx.variables import HISTORIES, INTEGER_SCALARS, SCALARS, attrs
 
-RECORDS = Path(os.environ.get("URMX_RECORDS", "/work/shared/records"))
-ELCENTRO = RECORDS / "elcentro1940" / "elcentro_S00E_1940.dat"
 EXAMPLES = Path(__file__).resolve().parents[1] / "catalog" / "examples"
 DT = 0.02
-pytestmark = pytest.mark.skipif(not ELCENTRO.is_file(), reason="El Centro record missing")
-
-# the benchmark wall of issue 2
-BENCHMARK = Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
-                 top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
 
 
 @pytest.fixture(scope="module")
-def elcentro():
+def wall(make_wall):
+    """The benchmark wall: b 0.23 m, h 4.14 m, crack at 2/3, 30 t, rigid base, top
+    diaphragm 815 kN/m with 20 t and 12 % damping."""
+    w = make_wall()
+    assert w == Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                     top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
+    return w
+
+
+@pytest.fixture(scope="module")
+def elcentro(records_dir):
     """El Centro 1940 S00E as an ObsPy Trace [m s-2]."""
     from urmx.records import read
 
-    return read(ELCENTRO, dt=DT, unit="cm/s2")[0]
+    return read(records_dir / "elcentro1940" / "elcentro_S00E_1940.dat", dt=DT,
+                unit="cm/s2")[0]
 
 
 @pytest.fixture(scope="module")
@@ -43,13 +47,13 @@ def first5s(elcentro):
 
 
 @pytest.fixture(scope="module")
-def response(first5s):
+def response(first5s, wall):
     """Benchmark wall, El Centro 0-5 s x 0.5, with a 1 s tail and histories."""
-    return urmx.simulate(BENCHMARK, first5s, DT, scale=0.5, tail=1.0, history=True)
+    return urmx.simulate(wall, first5s, DT, scale=0.5, tail=1.0, history=True)
 
 
-def test_scalar_variables_exactly_with_registry_attrs(first5s):
-    ds = urmx.simulate(BENCHMARK, first5s, DT, scale=0.5)
+def test_scalar_variables_exactly_with_registry_attrs(first5s, wall):
+    ds = urmx.simulate(wall, first5s, DT, scale=0.5)
     assert set(ds.data_vars) == set(SCALARS)
     assert list(ds.data_vars) == list(SCALARS)
     assert not ds.dims and not ds.coords
@@ -90,7 +94,7 @@ def test_scalar_values(response):
     assert ds.attrs["duration"] == pytest.approx(6.0, abs=1e-12)
 
 
-def test_history_on_the_record_grid(response, first5s):
+def test_history_on_the_record_grid(response, first5s, wall):
     ds = response
     n = 251 + 50  # record samples + 1 s tail at 0.02 s
     assert dict(ds.sizes) == {"time": n}
@@ -108,7 +112,7 @@ def test_history_on_the_record_grid(response, first5s):
     assert set(np.unique(ds.pattern.values)) <= {11, 12, 21, 22}
     assert {11, 12, 21, 22} & set(np.unique(ds.pattern.values)) >= {12, 21, 22}
     # kinematics (MODEL.md section 1) and the rigid base reported exactly
-    a1, a2 = BENCHMARK.a1, BENCHMARK.a2
+    a1, a2 = wall.a1, wall.a2
     np.testing.assert_array_equal(ds.base_displacement.values, 0.0)
     np.testing.assert_array_equal(ds.base_acceleration.values, ag)
     np.testing.assert_allclose(ds.crack_displacement, a1 * ds.theta_lower, rtol=1e-12,
@@ -133,10 +137,10 @@ def test_netcdf_round_trip(response, tmp_path):
     assert back.pattern.dtype.kind == "i" and back.collapsed.dtype.kind == "i"
 
 
-def test_reference_method_agrees(first5s):
+def test_reference_method_agrees(first5s, wall):
     ag = first5s[:126]  # 2.5 s keeps the scipy run short
-    exact = urmx.simulate(BENCHMARK, ag, DT, scale=0.5)
-    ref = urmx.simulate(BENCHMARK, ag, DT, scale=0.5, method="reference")
+    exact = urmx.simulate(wall, ag, DT, scale=0.5)
+    ref = urmx.simulate(wall, ag, DT, scale=0.5, method="reference")
     assert ref.attrs["method"] == "reference" and ref.attrs["rtol"] == 1e-10
     assert "rtol" not in exact.attrs
     for name in SCALARS:
@@ -149,8 +153,8 @@ def test_reference_method_agrees(first5s):
                                                                   rel=1e-8)
 
 
-def test_collapse(first5s):
-    ds = urmx.simulate(BENCHMARK, first5s, DT, scale=3.0, history=True)
+def test_collapse(first5s, wall):
+    ds = urmx.simulate(wall, first5s, DT, scale=3.0, history=True)
     assert ds.attrs["status"] == "collapsed" and int(ds.collapsed) == 1
     t = float(ds.collapse_time)
     assert t == pytest.approx(3.031617891697535, abs=1e-9)
@@ -159,32 +163,32 @@ def test_collapse(first5s):
     after = ds.time.values > t
     assert (ds.pattern.values[after] == 0).all()
     assert np.isnan(ds.top_displacement.values[after]).all()
-    below = urmx.simulate(BENCHMARK, first5s, DT, scale=2.0)
+    below = urmx.simulate(wall, first5s, DT, scale=2.0)
     assert int(below.collapsed) == 0 and float(below.instability_ratio) < 0.6
 
 
-def test_trace_input(elcentro, first5s):
+def test_trace_input(elcentro, first5s, wall):
     tr = elcentro.copy()
     tr.data = first5s.copy()
-    a = urmx.simulate(BENCHMARK, tr, scale=0.5)
-    b = urmx.simulate(BENCHMARK, first5s, DT, scale=0.5)
+    a = urmx.simulate(wall, tr, scale=0.5)
+    b = urmx.simulate(wall, first5s, DT, scale=0.5)
     xr.testing.assert_identical(a.drop_attrs() if hasattr(a, "drop_attrs") else a,
                                 b.drop_attrs() if hasattr(b, "drop_attrs") else b)
-    assert urmx.simulate(BENCHMARK, tr, DT, scale=0.5).attrs["dt"] == DT
+    assert urmx.simulate(wall, tr, DT, scale=0.5).attrs["dt"] == DT
     with pytest.raises(ValueError, match="differs from the trace's stats.delta"):
-        urmx.simulate(BENCHMARK, tr, 0.01)
+        urmx.simulate(wall, tr, 0.01)
     tr.stats.units = "cm/s2"
     with pytest.raises(ValueError, match="must be in m/s2"):
-        urmx.simulate(BENCHMARK, tr)
+        urmx.simulate(wall, tr)
 
 
-def test_public_name_is_the_function(first5s):
+def test_public_name_is_the_function(first5s, wall):
     import urmx.simulation  # importing the module must not shadow urmx.simulate
     from urmx.simulation import simulate
 
     assert urmx.simulate is simulate
-    xr.testing.assert_identical(urmx.simulate(BENCHMARK, first5s[:20], DT),
-                                simulate(BENCHMARK, first5s[:20], DT))
+    xr.testing.assert_identical(urmx.simulate(wall, first5s[:20], DT),
+                                simulate(wall, first5s[:20], DT))
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -199,26 +203,25 @@ def test_public_name_is_the_function(first5s):
     (dict(tail=-1.0), r"tail=-1.0 must be a non-negative"),
     (dict(dt=None), r"dt is required"),
 ])
-def test_bad_arguments(first5s, kwargs, message):
+def test_bad_arguments(first5s, kwargs, message, wall):
     kwargs = {"dt": DT, **kwargs}
     dt = kwargs.pop("dt")
     with pytest.raises(ValueError, match=message):
-        urmx.simulate(BENCHMARK, first5s[:20], dt, **kwargs)
+        urmx.simulate(wall, first5s[:20], dt, **kwargs)
 
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
-def test_non_finite_samples(first5s, bad):
+def test_non_finite_samples(first5s, bad, wall):
     ag = first5s[:20].copy()
     ag[7] = bad
     with pytest.raises(ValueError, match=r"1 NaN/inf sample\(s\), the first at index 7 "
                                          r"\(t = 0.14 s\)"):
-        urmx.simulate(BENCHMARK, ag, DT)
+        urmx.simulate(wall, ag, DT)
 
 
 # ---- wall files -----------------------------------------------------------------------
-def test_example_walls():
-    bench = read_wall(EXAMPLES / "benchmark-wall.toml")
-    assert bench == BENCHMARK
+def test_example_walls(wall):
+    assert read_wall(EXAMPLES / "benchmark-wall.toml") == wall
     w12, west, c9 = (read_wall(EXAMPLES / f) for f in ("wall12.toml", "west-wall.toml",
                                                        "c9.toml"))
     assert w12.bottom_rigid and w12.top_rigid and w12.pmr == 72.0
@@ -250,7 +253,7 @@ def test_bad_wall_files(tmp_path, text, message):
     path.write_text(text)
     with pytest.raises(ValueError) as err:
         read_wall(path)
-    assert str(err.value).startswith(f"{path}: ")
+    assert re.match(rf"{re.escape(str(path))}(:\d+)?: ", str(err.value))  # file (and line)
     assert message in str(err.value)
 
 
@@ -279,7 +282,7 @@ def test_cli_table(capsys, record5s):
     assert len({line.index(" m") for line in lines[2:5]}) == 1  # aligned unit column
 
 
-def test_cli_out_and_plot(capsys, record5s, tmp_path, first5s):
+def test_cli_out_and_plot(capsys, record5s, tmp_path, first5s, wall):
     nc, png = tmp_path / "run.nc", tmp_path / "run.png"
     rc = main(["simulate", str(EXAMPLES / "benchmark-wall.toml"), str(record5s), "--dt", "0.02",
                "--unit", "m/s2", "--scale", "3", "--cor", "0.7", "--impact", "contact",
@@ -288,35 +291,26 @@ def test_cli_out_and_plot(capsys, record5s, tmp_path, first5s):
     assert rc == 0 and f"wrote {nc}" in out and f"wrote {png}" in out
     with xr.open_dataset(nc) as ds:
         ds.load()
-    expected = urmx.simulate(BENCHMARK, first5s, DT, scale=3.0, cor=0.7, impact="contact",
+    expected = urmx.simulate(wall, first5s, DT, scale=3.0, cor=0.7, impact="contact",
                              history=True)
     xr.testing.assert_allclose(ds, expected, rtol=1e-12)
     assert ds.attrs["impact"] == "contact" and ds.attrs["status"] == expected.attrs["status"]
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
 
 
-def test_cli_plot_artists(response, tmp_path):
-    import matplotlib.pyplot as plt
+def test_plot_simulation_artists(response):
+    from urmx.plot import plot_simulation
 
-    from urmx.commands.simulate import plot_simulation
-
-    captured = {}
-    orig = plt.close
-    plt.close = lambda fig=None: captured.setdefault("fig", fig)
-    try:
-        plot_simulation(response, tmp_path / "p.png")
-    finally:
-        plt.close = orig
-    fig = captured["fig"]
-    ax1, ax2 = fig.axes
-    assert len(ax1.lines) == 3 and len(ax2.lines) == 1
+    ax1, ax2 = plot_simulation(response)
+    assert ax1.figure is ax2.figure and len(ax1.figure.axes) == 2
+    assert [ln.get_label() for ln in ax1.lines] == [
+        "displacement at wall top", "displacement at crack height", "base displacement"]
+    assert len(ax2.lines) == 1 and ax2.get_xlabel() == "time [s]"
     assert [t.get_text() for t in ax2.get_yticklabels()] == ["0", "11", "12", "21", "22"]
-    plt.close(fig)
 
 
-@pytest.mark.skipif(not (RECORDS / "elcentro1940").is_dir(), reason="records missing")
-def test_cli_manifest_record(capsys, monkeypatch):
-    monkeypatch.setenv("URMX_RECORDS", str(RECORDS))
+def test_cli_manifest_record(capsys, monkeypatch, records_dir):
+    monkeypatch.setenv("URMX_RECORDS", str(records_dir))
     rc = main(["simulate", str(EXAMPLES / "benchmark-wall.toml"), "elcentro", "--scale", "0.5"])
     out, err = capsys.readouterr()
     assert rc == 0, err

@@ -90,10 +90,8 @@ cor = 0.8
 
 
 @pytest.fixture
-def small(tmp_path):
-    path = tmp_path / "small.toml"
-    path.write_text(STUDY)
-    return path
+def small(make_study):
+    return make_study(STUDY, "small.toml")
 
 
 def _run(small, **kw):
@@ -159,9 +157,8 @@ def test_netcdf_round_trip_is_identical(fake_records, small, tmp_path):
     xr.testing.assert_identical(ds, back.load())
 
 
-def test_added_dimensions_and_pairs(fake_records, tmp_path):
-    path = tmp_path / "dims.toml"
-    path.write_text("""
+def test_added_dimensions_and_pairs(fake_records, make_study):
+    path = make_study("""
 [study]
 walls = ["s18", "c9"]
 diaphragms = ["specimen"]
@@ -172,7 +169,7 @@ scale = [1.0, 2.0]
 impact = ["scale", "contact"]
 damping = [0.05]
 pairs = {s18 = ["shake"], c9 = ["quake", "shake"]}
-""")
+""", "dims.toml")
     ds = st.run_study(path, kernel=fake_kernel, scheduler="serial", progress=False)
     assert ds.peak_crack_displacement.dims == ("wall", "diaphragm", "record", "cor", "scale",
                                                "impact", "damping")
@@ -213,13 +210,26 @@ def test_interrupted_run_resumes_without_recomputing(fake_records, small, tmp_pa
 
 
 def test_local_cluster_equals_serial(fake_records, small):
-    from distributed import Client, LocalCluster
-
     serial = _run(small)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster, Client(cluster) as client:
+    client = st.local_client(2)
+    try:
+        assert len(client.scheduler_info()["workers"]) == 2
         parallel = _run(small, scheduler=client)
+    finally:
+        st.close_client(client)
+    assert client.status == "closed"
     xr.testing.assert_identical(*_same_history(serial, parallel))
+
+
+def test_run_grid_in_memory_equals_run_study(fake_records, small, tmp_path):
+    study = load_study(small)
+    records = st.resolve_records(study)
+    tasks = st.batch_tasks(study, records, batch_size=2, kernel=fake_kernel)
+    assert len(tasks) == 8 and all(len(b.walls) == 1 and b.key for b, _ in tasks)
+    CALLS.clear()
+    ds = st.run_grid(study, records, "serial", batch_size=2, kernel=fake_kernel)
+    assert len(CALLS) == 16 and not list(tmp_path.glob("*.nc*"))  # nothing on disk
+    xr.testing.assert_identical(*_same_history(ds, _run(small)))
 
 
 @pytest.mark.parametrize("body, needle, line", [
@@ -227,30 +237,28 @@ def test_local_cluster_equals_serial(fake_records, small):
     ("cor = []", "study.cor: has no values", 8),
     ('diaphragms = ["D9"]', "unknown diaphragm id 'D9'", 5),
 ])
-def test_bad_study_fails_with_file_line_and_key(tmp_path, body, needle, line):
+def test_bad_study_fails_with_file_line_and_key(make_study, body, needle, line):
     key = body.split(" =")[0]
     lines = [ln for ln in STUDY.splitlines()[:8]]
     lines = [body if ln.startswith(key + " =") else ln for ln in lines]
-    path = tmp_path / "bad.toml"
-    path.write_text("\n".join(lines) + "\n")
+    path = make_study("\n".join(lines) + "\n", "bad.toml")
     with pytest.raises(CatalogError) as err:
         load_study(path)
     assert f"{path}:{line}:" in str(err.value) and needle in str(err.value)
 
 
-def test_negative_stiffness_fails(tmp_path):
-    path = tmp_path / "neg.toml"
-    path.write_text(STUDY.replace('["D1", "D5"]', '["D1", "soft"]') + """
+def test_negative_stiffness_fails(make_study):
+    path = make_study(STUDY.replace('["D1", "D5"]', '["D1", "soft"]') + """
 [diaphragms.soft]
 stiffness = -5.0e5
-""")
+""", "neg.toml")
     with pytest.raises(CatalogError, match=r"neg\.toml:17: diaphragms\.soft\.stiffness: -500000"):
         load_study(path)
 
 
-def test_missing_record_fails_before_any_analysis(fake_records, tmp_path):
-    path = tmp_path / "rec.toml"
-    path.write_text(STUDY.replace('["quake", "shake"]\ncor', '["quake", "elsewhere"]\ncor'))
+def test_missing_record_fails_before_any_analysis(fake_records, make_study):
+    path = make_study(STUDY.replace('["quake", "shake"]\ncor', '["quake", "elsewhere"]\ncor'),
+                      "rec.toml")
     with pytest.raises(CatalogError, match=r"rec\.toml:7: study\.records: record 'elsewhere'"):
         st.run_study(path, kernel=fake_kernel, scheduler="serial", progress=False)
     assert CALLS == []

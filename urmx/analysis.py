@@ -56,39 +56,11 @@ PAPER_BEST_COR = {"wall12": 0.78, "west": 0.83, "c9": 0.83}
 # Section 5.2: the only response value the text states (West wall instability at 5.3 s)
 PAPER_TARGETS = {"west": ("collapse_time", 5.3)}
 
-LOCAL = {  # units/long_name of quantities this module derives (not in the registry)
-    "instability_displacement_upper": ("m", "instability displacement, upper segment"),
-    "instability_displacement_lower": ("m", "instability displacement, lower segment"),
-    "instability_displacement_family1": ("m", "lower instability displacement, Case 3"),
-    "instability_displacement_family2": ("m", "lower instability displacement, Case 2"),
-    "lower_case": ("1", "segment case governing the lower instability displacement"),
-    "rank_correlation": ("1", "Spearman rank correlation"),
-    "best_cor": ("1", "best-matching coefficient of restitution"),
-    "misfit": ("1", "relative misfit to the target"),
-    "frequency": ("Hz", "diaphragm frequency"),
-    "frequency_low": ("Hz", "record significant frequency, lower bound"),
-    "frequency_high": ("Hz", "record significant frequency, upper bound"),
-    "in_range": ("1", "diaphragm frequency within the record's significant range"),
-    "range_distance": ("1", "log10 distance of diaphragm frequency from the record's range"),
-    "mean_instability_ratio": ("1", "mean governing instability ratio over walls"),
-    "stability_change": ("1", "change in mean instability ratio"),
-    "collapses": ("1", "number of collapsed walls"),
-}
-
-
 class MissingDataError(ValueError):
     """The study Dataset lacks a variable, coordinate or cell a reduction needs."""
 
 
 # ---- helpers --------------------------------------------------------------------------
-
-def label_attrs(name: str) -> dict[str, str]:
-    """units/long_name for a registry name or a quantity derived here."""
-    if name in LOCAL:
-        units, long_name = LOCAL[name]
-        return {"units": units, "long_name": long_name}
-    return {k: v for k, v in registry_attrs(name).items() if k in ("units", "long_name")}
-
 
 def _require(ds: xr.Dataset, names: Iterable[str], what: str) -> None:
     missing = [n for n in names if n not in ds.variables]
@@ -182,8 +154,8 @@ def rank_correlation(da: xr.DataArray, coord: str, dim: str) -> xr.DataArray:
     x, y = xr.broadcast(da.astype(float).compute(), da[coord].astype(float).compute())
     rho = xr.apply_ufunc(_spearman, x, y, input_core_dims=[[dim], [dim]])
     rho = rho.rename("rank_correlation").drop_vars(coord, errors="ignore")
-    rho.attrs = {"units": "1", "long_name": f"Spearman rank correlation of "
-                 f"{da.attrs.get('long_name', da.name)} with {coord}"}
+    rho.attrs = {**registry_attrs("rank_correlation"), "long_name": f"Spearman rank "
+                 f"correlation of {da.attrs.get('long_name', da.name)} with {coord}"}
     return rho
 
 
@@ -220,7 +192,7 @@ def governing_instability(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.DataArra
     _require(ds, ["instability_ratio", "slenderness"], "the stability figure")
     out = select(ds["instability_ratio"], keep=("wall", "diaphragm", "record"), cor=cor)
     out = out.sortby("slenderness")
-    out.attrs.update(label_attrs("instability_ratio"))
+    out.attrs.update(registry_attrs("instability_ratio"))
     return out
 
 
@@ -322,8 +294,8 @@ def instability_displacements(ds: xr.Dataset) -> xr.Dataset:
             out["instability_displacement_family2"][i, j] = wall.a1 * wall.segment(2).theta0
             out["instability_displacement_family1"][i, j] = wall.a1 * wall.segment(3).theta0
     coords = {"wall": walls, "diaphragm": diaphragms}
-    return xr.Dataset({k: xr.DataArray(v, coords, ("wall", "diaphragm"), attrs=label_attrs(k))
-                       for k, v in out.items()})
+    return xr.Dataset({k: xr.DataArray(v, coords, ("wall", "diaphragm"),
+                                       attrs=registry_attrs(k)) for k, v in out.items()})
 
 
 def stability_table(ds: xr.Dataset, height: float = FIG8_HEIGHT,
@@ -370,7 +342,7 @@ def stability_table(ds: xr.Dataset, height: float = FIG8_HEIGHT,
                       instability_displacement_lower=lower, lower_case=case)
     out = out.drop_vars([c for c in out.coords if c not in ("diaphragm",)])
     for name in out.data_vars:
-        out[name].attrs = label_attrs(name)
+        out[name].attrs = registry_attrs(name)
     out.attrs = {"wall": wall, "height": float(ds["height"].sel(wall=wall)),
                  "record": match_id(ds, "record", record), "cor": cor,
                  "instability_displacement_source": source}
@@ -405,7 +377,7 @@ def best_cor(da: xr.DataArray, target, dim: str = "cor") -> xr.Dataset:
     best = best.where(np.isfinite(filled.min(dim)))
     out = xr.Dataset({"best_cor": best, "misfit": miss.drop_vars(dim, errors="ignore")})
     for name in out.data_vars:
-        out[name].attrs = label_attrs(name)
+        out[name].attrs = registry_attrs(name)
     out.attrs["target_variable"] = str(da.name)
     return out
 
@@ -431,7 +403,7 @@ def frequency_ranges(ds: xr.Dataset) -> xr.Dataset:
     out = xr.Dataset({"frequency_low": ("record", np.asarray(lo, float)),
                       "frequency_high": ("record", np.asarray(hi, float))}, coords)
     for name in out.data_vars:
-        out[name].attrs = label_attrs(name)
+        out[name].attrs = registry_attrs(name)
     out.attrs["frequency_range_source"] = source
     return out
 
@@ -479,7 +451,7 @@ def resonance(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.Dataset:
                                                                               "record")
     out = out.reset_coords(drop=True)
     for name in out.data_vars:
-        out[name].attrs = label_attrs(name)
+        out[name].attrs = registry_attrs(name)
     out.attrs = {"reference_diaphragm": str(ref),
                  "frequency_range_source": ranges.attrs["frequency_range_source"]}
     return out
@@ -748,9 +720,11 @@ def cor_matches(ds: xr.Dataset, targets: dict | None = None) -> xr.Dataset:
         miss[i] = np.broadcast_to(match["misfit"].values, miss[i].shape)
     coords = {"wall": walls, "record": ds["record"].values,
               "paper_best_cor": ("wall", np.asarray(paper, float),
-                                 {"units": "1", "long_name": "the paper's best COR"}),
-              "target_variable": ("wall", np.asarray(tvar, dtype=str)),
-              "target_value": ("wall", np.asarray(tval, float))}
-    out = xr.Dataset({"best_cor": (("wall", "record"), best, label_attrs("best_cor")),
-                      "misfit": (("wall", "record"), miss, label_attrs("misfit"))}, coords)
+                                 registry_attrs("paper_best_cor")),
+              "target_variable": ("wall", np.asarray(tvar, dtype=str),
+                                  registry_attrs("target_variable")),
+              "target_value": ("wall", np.asarray(tval, float),
+                               registry_attrs("target_value"))}
+    out = xr.Dataset({"best_cor": (("wall", "record"), best, registry_attrs("best_cor")),
+                      "misfit": (("wall", "record"), miss, registry_attrs("misfit"))}, coords)
     return out

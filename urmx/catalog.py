@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from .config import project_root
+from .markdown import table
 from .model import RIGID, G, Wall
 
 if sys.version_info >= (3, 11):
@@ -62,11 +63,10 @@ class _Source:
         self.path = Path(path)
         try:
             self.text = self.path.read_text(encoding="utf-8")
+            self.data = tomllib.loads(self.text)
         except FileNotFoundError:
             raise FileNotFoundError(f"{self.path}: no such file") from None
-        try:
-            self.data = tomllib.loads(self.text)
-        except tomllib.TOMLDecodeError as exc:
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise CatalogError(f"{self.path}: not valid TOML: {exc}") from None
 
     def line(self, *needles: str) -> int | None:
@@ -206,19 +206,50 @@ class Catalog:
 
 
 def _wall_from_table(src: _Source, key: str, table: dict, **extra: Any) -> Wall:
+    """The `Wall` of a TOML table of wall fields (`extra` fields added); ``key`` is the
+    table's dotted key ("" at the top level). The one TOML-to-Wall loader: catalog walls,
+    study walls and wall files (:func:`read_wall`)."""
+    where = (key.split(".")[-1],) if key else ()
     unknown = set(table) - set(WALL_FIELDS) - {"name", "source", "records"}
     if unknown:
         name = sorted(unknown)[0]
-        raise src.error(f"{key}.{name}", f"unknown wall field (known: {', '.join(WALL_FIELDS)})",
-                        key.split(".")[-1], name)
+        raise src.error(f"{key}.{name}".lstrip("."), f"unknown wall key {name!r} (known: "
+                        f"{', '.join(WALL_FIELDS)})", *where, name)
     values = {k: table[k] for k in WALL_FIELDS if k in table}
     values.update(extra)
     try:
         return Wall(**values)
     except (TypeError, ValueError) as exc:
         bad = next((k for k in WALL_FIELDS if k in str(exc)), None)
-        needles = (key.split(".")[-1], bad) if bad else (key.split(".")[-1],)
-        raise src.error(key + (f".{bad}" if bad else ""), str(exc), *needles) from None
+        message = str(exc).replace("Wall.__init__()", "wall")
+        raise src.error(f"{key}.{bad}".lstrip(".") if bad else key or "wall", message,
+                        *where, *([bad] if bad else [])) from None
+
+
+def read_wall(path: str | os.PathLike) -> Wall:
+    """A `Wall` from a TOML file: its fields in a ``[wall]`` table or at the top level
+    (``name``, ``source`` and ``records`` may sit beside them, as in ``walls.toml``).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    CatalogError
+        Not TOML, an unknown key, a missing or bad field: the message names the file, the
+        key and (where it can be found) the line.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"wall file {str(path)!r} does not exist")
+    src = _Source(path)
+    if "wall" not in src.data:
+        return _wall_from_table(src, "", src.data)
+    extra = [k for k in src.data if k != "wall"]
+    if extra:
+        raise src.error(extra[0], f"unknown key(s) {', '.join(extra)} beside the [wall] table")
+    if not isinstance(src.data["wall"], dict):
+        raise src.error("wall", "must be a table of Wall fields")
+    return _wall_from_table(src, "wall", src.data["wall"])
 
 
 def _diaphragm_from_table(src: _Source, key: str, ident: str, t: dict) -> Diaphragm:
@@ -659,10 +690,7 @@ def calibration_report(out_dir: str | os.PathLike | None = None,
     The table shows the catalog's building (as stored, rounded) against Table IV and
     Table VI, and the unrounded least-squares optimum beside it.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     cat = catalog or load_catalog()
     out = Path(out_dir) if out_dir is not None else project_root() / "reports"
@@ -690,15 +718,15 @@ def calibration_report(out_dir: str | os.PathLike | None = None,
         "",
         "## Result",
         "",
-        "| quantity | catalog (rounded) | least-squares optimum |",
-        "|---|---|---|",
-        f"| masonry density [kg m-3] | {b.density:g} (chosen) | {best.building.density:g} |",
-        f"| out-of-plane wall length [m] | {b.wall_length:g} | {best.building.wall_length:.4f} |",
-        f"| diaphragm seismic weight [kPa] | {b.diaphragm_weight:g} | "
-        f"{best.building.diaphragm_weight:.4f} |",
-        f"| diaphragm effective mass [kg] | {b.diaphragm_mass:.0f} | "
-        f"{best.building.diaphragm_mass:.0f} |",
-        f"| RMS relative residual | {stored.rms:.4f} | {best.rms:.4f} |",
+        *table(["quantity", "catalog (rounded)", "least-squares optimum"], [
+            ["masonry density [kg m-3]", f"{b.density:g} (chosen)", f"{best.building.density:g}"],
+            ["out-of-plane wall length [m]", f"{b.wall_length:g}",
+             f"{best.building.wall_length:.4f}"],
+            ["diaphragm seismic weight [kPa]", f"{b.diaphragm_weight:g}",
+             f"{best.building.diaphragm_weight:.4f}"],
+            ["diaphragm effective mass [kg]", f"{b.diaphragm_mass:.0f}",
+             f"{best.building.diaphragm_mass:.0f}"],
+            ["RMS relative residual", f"{stored.rms:.4f}", f"{best.rms:.4f}"]]),
         "",
         "## Table IV: indicative frequencies",
         "",
@@ -706,28 +734,23 @@ def calibration_report(out_dir: str | os.PathLike | None = None,
         "the shortest (slenderness 8). D5 uses Table IV's 1e9 N/m here; the analyses treat "
         "it as rigid.",
         "",
-        "| diaphragm | stiffness [N m-1] | bound | wall height [m] | Table IV [Hz] | "
-        "model [Hz] | residual |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for f in stored.frequencies:
-        k = cat.diaphragms[f["diaphragm"]].table_stiffness
-        lines.append(f"| {f['diaphragm']} | {k:.4g} | {f['bound']} | {f['height']:.2f} | "
-                     f"{f['target']:g} | {f['model']:.3f} | {f['residual']:+.3f} |")
-    lines += [
+        *table(["diaphragm", "stiffness [N m-1]", "bound", "wall height [m]", "Table IV [Hz]",
+                "model [Hz]", "residual"],
+               [[f["diaphragm"], f"{cat.diaphragms[f['diaphragm']].table_stiffness:.4g}",
+                 f["bound"], f"{f['height']:.2f}", f"{f['target']:g}", f"{f['model']:.3f}",
+                 f"{f['residual']:+.3f}"] for f in stored.frequencies]),
         "",
         "## Table VI: instability displacements of the 4140 mm wall",
         "",
-        "| segment, case | Table VI [mm] | model [mm] | residual |",
-        "|---|---|---|---|",
-        f"| lower, patterns 11/12 (Case 3) | {1e3 * inst['target']:.0f} | "
-        f"{1e3 * inst['model']:.1f} | {inst['residual']:+.3f} |",
-        f"| lower, patterns 21/22 (Case 2) | 230 | {1e3 * inst['lower_case2']:.1f} | "
-        f"{inst['lower_case2'] / 0.230 - 1:+.3f} |",
-        f"| upper (Case 1), diaphragm weight on the wall | 230 | "
-        f"{1e3 * inst['upper_case1']:.1f} | {inst['upper_case1'] / 0.230 - 1:+.3f} |",
-        f"| upper (Case 1), m_dt = 0 | 230 | {1e3 * inst['upper_case1_no_diaphragm']:.1f} | "
-        f"{inst['upper_case1_no_diaphragm'] / 0.230 - 1:+.3f} |",
+        *table(["segment, case", "Table VI [mm]", "model [mm]", "residual"], [
+            ["lower, patterns 11/12 (Case 3)", f"{1e3 * inst['target']:.0f}",
+             f"{1e3 * inst['model']:.1f}", f"{inst['residual']:+.3f}"],
+            ["lower, patterns 21/22 (Case 2)", "230", f"{1e3 * inst['lower_case2']:.1f}",
+             f"{inst['lower_case2'] / 0.230 - 1:+.3f}"],
+            ["upper (Case 1), diaphragm weight on the wall", "230",
+             f"{1e3 * inst['upper_case1']:.1f}", f"{inst['upper_case1'] / 0.230 - 1:+.3f}"],
+            ["upper (Case 1), m_dt = 0", "230", f"{1e3 * inst['upper_case1_no_diaphragm']:.1f}",
+             f"{inst['upper_case1_no_diaphragm'] / 0.230 - 1:+.3f}"]]),
         "",
         "Table VI's 230 mm for the upper segment is b, Case 1's Delta_ins = a2*theta0 = "
         "b/2 (m2 + m_dt)/(0.5 m2 + m_dt), which equals b only when no diaphragm weight bears "
@@ -745,7 +768,8 @@ def calibration_report(out_dir: str | os.PathLike | None = None,
     ]
     (out / "calibration.md").write_text("\n".join(lines), encoding="utf-8")
 
-    fig, ax = plt.subplots(figsize=(6.5, 4.0))
+    fig = Figure(figsize=(6.5, 4.0))
+    ax = fig.subplots()
     _, hmin, hmax = _targets(cat)
     hs = np.linspace(hmin, hmax, 50)
     t = next(w.wall.thickness for w in cat.walls.values() if w.parametric)
@@ -765,5 +789,4 @@ def calibration_report(out_dir: str | os.PathLike | None = None,
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     fig.savefig(out / "calibration" / "frequencies.png", dpi=120)
-    plt.close(fig)
     return out / "calibration.md"

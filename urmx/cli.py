@@ -22,13 +22,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"urmx {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"urmx.commands.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"urmx.commands.{name}":
-                continue  # that command is not built yet
-            raise
-        module.register(sub)
+        importlib.import_module(f"urmx.commands.{name}").register(sub)
     return parser
 
 

@@ -71,7 +71,7 @@ from collections import OrderedDict
 import numpy as np
 from numba import njit
 
-from . import _jit
+from . import jitcache
 from .model import (
     HELD_BASE,
     HELD_BOTH,
@@ -1114,7 +1114,7 @@ def _peaks_event(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, 
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")
-def _record(hist, k, L, N, ist, r, v, val, nfull):
+def record_row(hist, k, L, N, ist, r, v, val, nfull):
     """One row of the histories: tilts, displacements, accelerations, pattern and the
     support-reduced coordinates r = N y and their rates."""
     hist[k, 0] = _rowdot(L, ROW_T1, r)
@@ -1203,7 +1203,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     for t in range(N_TRACK):
         peaks[t] = max(peaks[t], abs(val_a[t]))
     if want_hist:
-        _record(hist, 0, L, GN[h], ist, r, v, val_a, nfull)
+        record_row(hist, 0, L, GN[h], ist, r, v, val_a, nfull)
     duration = t_end
     done = False
     beta_prev = beta0
@@ -1430,7 +1430,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
         if want_hist:
             a_grid = ag[step + 1] if step + 1 < N else 0.0
             _point(MK, MC, MR, MG, TR, r, v, a_grid, 0.0, val_b, der_b, sacc, sjerk)
-            _record(hist, step + 1, L, GN[h], ist, r, v, val_b, nfull)
+            record_row(hist, step + 1, L, GN[h], ist, r, v, val_b, nfull)
     if status == ST_COLLAPSED:
         peaks[TR_RL] = min(peaks[TR_RL], 1.0)
         peaks[TR_RU] = min(peaks[TR_RU], 1.0)
@@ -1589,6 +1589,12 @@ class Tables:
             np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP),
             np.zeros(NP), np.zeros(NP), np.zeros(3, np.int64))
 
+    @property
+    def nbytes(self) -> int:
+        """Memory held by the tables and work arrays. [B]"""
+        arrays = [*self.geo, *self.pieces, *self.work]
+        return int(sum(a.nbytes for a in arrays))
+
     def _free_system(self, fam: int, bl: int, bu: int):
         """(Minv, C, K, R0, MinvG) of the support-reduced system with no joint held."""
         key = (fam, bl, bu)
@@ -1708,10 +1714,10 @@ def _announce_compile() -> float | None:
     if _COMPILED:
         return None
     _COMPILED = True
-    if _jit.is_compiled("_march"):
+    if jitcache.is_compiled("_march"):
         return None
     sys.stderr.write("urmx: compiling the kernel (once per install; cached in "
-                     f"{_jit.cache_dir()}) ...\n")
+                     f"{jitcache.cache_dir()}) ...\n")
     sys.stderr.flush()
     return time.perf_counter()
 
@@ -1777,7 +1783,7 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
     return ag * scale, dt, ntail, LAWS[impact]
 
 
-def _scalars(peaks, outs, status):
+def scalars(peaks, outs, status):
     """The result dict of one analysis (shared by both solvers)."""
     pk = peaks.tolist()  # Python floats in one call (this runs once per analysis)
     out = outs.tolist()
@@ -1871,7 +1877,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
             hist[:] = np.nan
     if started is not None:
         sys.stderr.write(f"urmx: kernel compiled in {time.perf_counter() - started:.1f} s\n")
-    res = _scalars(peaks, outs, status)
+    res = scalars(peaks, outs, status)
     if history:
         res["history"] = history_dict(hist, dt, n)
     if max_log:

@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from . import _jit  # noqa: F401  (the cache locator, before any @njit below)
+from . import jitcache  # noqa: F401  (the cache locator, before any @njit below)
 
 G = 9.81  # m/s2, the value the paper's Table III uses (MODEL.md section 1)
 RIGID = "rigid"

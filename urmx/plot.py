@@ -1,4 +1,5 @@
-"""Matplotlib figures of the paper (Figs. 5-10), one function per figure kind.
+"""Matplotlib figures of the paper (Figs. 5-10) and of one analysis, one function per
+figure kind.
 
 Each function takes the labelled objects of :mod:`urmx.analysis`, draws on ``ax=`` (or
 ``axes=``) when given and otherwise on a new :class:`matplotlib.figure.Figure` (no
@@ -154,3 +155,34 @@ def plot_cor_match(da: xr.DataArray, target: float | None = None,
     ax.legend(fontsize="small")
     ax.grid(True, alpha=0.3)
     return ax
+
+
+def plot_simulation(ds: xr.Dataset, axes: Sequence[Axes] | None = None) -> list[Axes]:
+    """One analysis over time (``urmx simulate --plot``): (a) wall top, crack and base
+    displacement [mm]; (b) the rocking pattern (0 after a stop); a dashed line at the
+    collapse. ``ds`` from :func:`urmx.simulate` with ``history=True``."""
+    if axes is None:
+        fig = Figure(figsize=(8, 5.5), layout="constrained")
+        axes = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": (3, 1)})
+    ax1, ax2 = panels(axes, 2)
+    t = ds["time"].values
+    for name, colour in (("top_displacement", "C0"), ("crack_displacement", "C1"),
+                         ("base_displacement", "C2")):
+        ax1.plot(t, 1e3 * ds[name].values, color=colour, lw=0.9,
+                 label=ds[name].attrs["long_name"])
+    ax1.set_ylabel("displacement relative to ground [mm]")
+    ax1.legend(loc="upper right", fontsize="small")
+    ax1.grid(alpha=0.3)
+    levels = np.array([0, 11, 12, 21, 22])  # 0 after a stop
+    ax2.step(t, np.searchsorted(levels, ds["pattern"].values), where="post", color="k", lw=0.9)
+    ax2.set_yticks(range(levels.size), [str(v) for v in levels])
+    ax2.set_ylabel(ds["pattern"].attrs["long_name"])
+    ax2.set_xlabel(label(ds["time"]))
+    ax2.grid(alpha=0.3)
+    if int(ds["collapsed"]):
+        for ax in (ax1, ax2):
+            ax.axvline(float(ds["collapse_time"]), color="r", ls="--", lw=0.8)
+    ax1.figure.suptitle(f"status {ds.attrs['status']}, scale {ds.attrs['scale']:g}, "
+                        f"cor {ds.attrs['cor']:g}, peak u_t "
+                        f"{1e3 * float(ds['peak_top_displacement']):.1f} mm")
+    return [ax1, ax2]

@@ -134,7 +134,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     def record(k, r, v, a):
         n, mid, mode, padded, TR, L = piece()
         val, _ = tracker_values(mode, TR, r, v, a, 0.0)
-        K._record(hist, k, L, GN[ist[K.I_H]], ist, _pad(r), _pad(v), val, nfull)
+        K.record_row(hist, k, L, GN[ist[K.I_H]], ist, _pad(r), _pad(v), val, nfull)
 
     def event_values(ne, n, r, v, a, b, mode):
         MK, MC, MR, MG = mode
@@ -255,7 +255,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     outs[K.O_DURATION] = duration
     outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP], outs[K.O_HOLDS] = counts
     outs[K.O_EVENTS] = events
-    res = K._scalars(peaks, outs, status)
+    res = K.scalars(peaks, outs, status)
     if history:
         res["history"] = K.history_dict(hist, dt, nfull)
     res["event_log"] = np.array([row + (0,) * (4 - len(row)) for row in log]).reshape(-1, 4)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +18,8 @@ import xarray as xr
 
 from . import analysis as A
 from . import plot as P
+from .markdown import table
+from .variables import attrs as registry_attrs
 
 KINDS = {"paper-single-storey": "single", "paper-multi-storey": "multi",
          "verification": "verification"}
@@ -33,17 +35,14 @@ TABLE_VI_COLUMNS = [  # (variable, header, scale to the paper's units)
 
 
 def open_archive(archive) -> xr.Dataset:
-    """A Dataset from a path (``urmx.study.open_study`` when available) or as given."""
+    """A Dataset loaded from a study archive path (`urmx.study.open_study`), or as given."""
     if isinstance(archive, xr.Dataset):
         return archive
     path = Path(archive)
     if not path.is_file():
         raise FileNotFoundError(f"no study archive {str(path)!r}")
-    try:
-        from .study import open_study
-    except ImportError:
-        with xr.open_dataset(path) as ds:
-            return ds.load()
+    from .study import open_study
+
     return open_study(path).load()
 
 
@@ -76,12 +75,6 @@ def classify(archives: Iterable) -> tuple[dict[str, xr.Dataset], list[str]]:
     return studies, notes
 
 
-def _table(header: Sequence[str], rows: Iterable[Sequence]) -> list[str]:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return lines + [""]
-
-
 def _fmt(value, digits: int = 3) -> str:
     value = float(value)
     if not np.isfinite(value):
@@ -105,7 +98,7 @@ def _grid_table(da: xr.DataArray, columns: str = "diaphragm", scale: float = 1.0
         rows.append([str(w), _fmt(row["slenderness"], 3)]
                     + [_fmt(float(row.sel({columns: c})) * scale, digits)
                        for c in da[columns].values])
-    return _table(header, rows)
+    return table(header, rows) + [""]
 
 
 def _section(lines: list[str], title: str, body) -> None:
@@ -144,7 +137,7 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
         rows.append([study_kind(ds), dims,
                      str(ds.attrs.get("history", "")).splitlines()[-1:][0]
                      if ds.attrs.get("history") else ""])
-    lines += _table(["study", "dimensions", "history (last line)"], rows)
+    lines += table(["study", "dimensions", "history (last line)"], rows) + [""]
     for kind, label in (("single", "paper-single-storey"), ("multi", "paper-multi-storey"),
                         ("verification", "verification")):
         if kind not in studies:
@@ -210,7 +203,7 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
                         + [_fmt(cell["unfavourable_fraction"], 3), _fmt(cell["lower_case"])])
         lines += [f"Wall `{tab.attrs['wall']}` (h = {tab.attrs['height']:.3g} m), record "
                   f"`{tab.attrs['record']}`, COR {tab.attrs['cor']:g}.", ""]
-        lines += _table(header, rows)
+        lines += table(header, rows) + [""]
         lines += ["Column (2) is the peak lower-segment drift a1*theta1 (crack height "
                   "relative to the base), (3) the peak upper drift a2*theta2. Ratios (6)-(8) "
                   "are the kernel's continuous-time ratios max_t |theta|/theta0 (MODEL.md "
@@ -271,7 +264,7 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
                     cells.append(f"{flag}; mean ratio {_fmt(c['mean_instability_ratio'], 2)} "
                                  f"({float(c['stability_change']):+.2f}){coll}")
                 rows.append([d, _fmt(res["frequency"].sel(diaphragm=d))] + cells)
-            lines += _table(header, rows)
+            lines += table(header, rows) + [""]
             lines += [f"Change in brackets: mean governing instability ratio over walls minus "
                       f"that of the stiffest diaphragm ({res.attrs['reference_diaphragm']}); "
                       "positive = less stable. Ranges from "
@@ -302,9 +295,9 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
                              _fmt(m["misfit"].sel(record=r), 2),
                              _fmt(float(peak) * 1e3),
                              _fmt(coll) if coll is not None else "-"])
-        lines += _table(["wall", "record", "paper's best COR", "target", "best COR",
-                         "misfit", "peak crack displacement at paper's COR (nearest on grid) [mm]",
-                         "collapse time there [s]"], rows)
+        lines += table(["wall", "record", "paper's best COR", "target", "best COR",
+                        "misfit", "peak crack displacement at paper's COR (nearest on grid) [mm]",
+                        "collapse time there [s]"], rows) + [""]
         lines += ["Best COR: the grid value whose response is nearest the target "
                   "(\\|response - target\\| / \\|target\\|; '-' when no COR gives a finite "
                   "response, e.g. no collapse). Targets: `measured_<variable>(wall)` in the "
@@ -322,7 +315,7 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
             if "diaphragm" in da.dims:
                 da = da.squeeze("diaphragm", drop=True)
             da = da.reset_coords(drop=True)
-            da.attrs = A.label_attrs(var)
+            da.attrs = registry_attrs(var)
             P.plot_cor_match(da, float(m["target_value"]), float(m["paper_best_cor"]), ax=ax)
             ax.set_title(w)
         lines += [_save(axes, out, "verification_cor.png"), ""]
@@ -347,9 +340,9 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
             verdict = {True: "yes", False: "**no**", None: "n/a"}[f["agree"]]
             rows.append([f["finding"], f["paper"], f["measure"], f["computed"], verdict,
                          f["note"]])
-        lines += _table(["finding (paper)", "paper states", "measure and criterion",
-                         "urmx computes", "agree", "why not, if known"],
-                        [[str(c).replace("|", "\\|") for c in r] for r in rows])
+        lines += table(["finding (paper)", "paper states", "measure and criterion",
+                        "urmx computes", "agree", "why not, if known"],
+                       [[str(c).replace("|", "\\|") for c in r] for r in rows]) + [""]
     _section(lines, "Findings of Sections 6-7 against this project's results", findings)
 
     path = out / "REPORT.md"

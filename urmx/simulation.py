@@ -12,11 +12,7 @@ costs about 0.2 ms, a large share of one analysis.
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import os
-import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -24,11 +20,6 @@ import xarray as xr
 
 from . import __version__, variables
 from .model import Wall
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 METHODS = ("exact", "reference")
 DEFAULT_RTOL = 1e-10  # relative tolerance of the reference method
@@ -163,48 +154,3 @@ def _attrs(wall: Wall, res: dict, *, method: str, rtol: float | None, dt: float,
     attrs["history"] = (f"urmx {__version__} simulate(method={method!r}, scale={scale:g}, "
                         f"cor={cor:g}, impact={impact!r}, tail={tail:g})")
     return attrs
-
-
-def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write a Dataset to netCDF through a temporary file, so no broken file is left."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    encoding = {name: {"_FillValue": None} for name in ds.coords}
-    try:
-        ds.to_netcdf(tmp, encoding=encoding)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
-
-
-def read_wall(path: str | os.PathLike) -> Wall:
-    """A `Wall` from a TOML file: its fields in a ``[wall]`` table or at the top level.
-
-    Unknown keys and bad values raise ``ValueError`` naming the file and the key.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"wall file {str(path)!r} does not exist")
-    try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: not valid TOML ({exc})") from None
-    table = doc.get("wall", doc)
-    if "wall" in doc and len(doc) > 1:
-        extra = ", ".join(k for k in doc if k != "wall")
-        raise ValueError(f"{path}: unknown key(s) {extra} beside the [wall] table")
-    if not isinstance(table, dict):
-        raise ValueError(f"{path}: 'wall' must be a table of Wall fields")
-    fields = [f.name for f in dataclasses.fields(Wall) if f.init]
-    for key in table:
-        if key not in fields:
-            raise ValueError(f"{path}: unknown wall key {key!r} (known: {', '.join(fields)})")
-    try:
-        return Wall(**table)
-    except TypeError as exc:  # a required field missing
-        raise ValueError(f"{path}: {exc}".replace("Wall.__init__()", "wall")) from None
-    except ValueError as exc:
-        raise ValueError(f"{path}: {exc}") from None
-

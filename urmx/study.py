@@ -17,7 +17,12 @@ first started, so a resumed run writes the same archive as an uninterrupted one.
 Schedulers: ``None`` (default) starts a local ``dask.distributed`` cluster of worker
 processes, one per core (the numba kernel holds the GIL, so processes beat threads);
 ``"threads"`` the same with threads; ``"serial"`` runs in this process; any other string is a
-scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it is.
+scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it is
+(:func:`local_client` starts one on this machine, :func:`close_client` stops it).
+
+:func:`run_study` reads a study file, resolves its records and writes the archive;
+:func:`run_grid` runs a grid built in code on records given in memory, with no archive
+(benchmarks); :func:`batch_tasks` lists the batches both hand to :func:`run_batch`.
 """
 
 from __future__ import annotations
@@ -40,51 +45,11 @@ import xarray as xr
 
 from . import variables
 from .catalog import SPECIMEN, Study, load_study
+from .netcdf import write_netcdf
 
 STATUS = ("ok", "collapsed", "event-limit", "not-run")  # flag values 0, 1, 2, 3
 NOT_RUN = STATUS.index("not-run")
 INT_FILL = -1  # integer outputs of cells a study's pairs leave out
-
-# attributes of the coordinates (the variable registry covers the kernel's outputs)
-COORDS: dict[str, dict[str, str]] = {
-    "wall": {"long_name": "wall id"},
-    "slenderness": {"units": "1", "long_name": "wall slenderness h/b"},
-    "height": {"units": "m", "long_name": "wall height"},
-    "thickness": {"units": "m", "long_name": "wall thickness"},
-    "mass": {"units": "kg", "long_name": "wall mass (effective for building walls)"},
-    "crack_ratio": {"units": "1", "long_name": "crack height over wall height"},
-    "pmr": {"units": "%", "long_name": "percentage of maximum rigid resistance"},
-    "diaphragm": {"long_name": "diaphragm id"},
-    "stiffness": {"units": "N m-1", "long_name": "diaphragm stiffness",
-                  "comment": "inf: rigid support; NaN: each test wall's own supports"},
-    "frequency": {"units": "Hz", "long_name": "indicative diaphragm frequency",
-                  "comment": "Table IV footnote SDOF (stiffness over diaphragm mass plus half "
-                             "the wall mass) for the study's median wall; "
-                             "see cell_frequency for every wall"},
-    "cell_frequency": {"units": "Hz", "long_name": "indicative frequency of the top support",
-                       "comment": "Table IV footnote SDOF of each wall on each diaphragm"},
-    "diaphragm_mass": {"units": "kg", "long_name": "diaphragm effective mass"},
-    "diaphragm_damping": {"units": "1", "long_name": "diaphragm damping ratio"},
-    "record": {"long_name": "ground-motion record id"},
-    "pga": {"units": "m s-2", "long_name": "peak ground acceleration (unscaled record)"},
-    "scale_factor": {"units": "1", "long_name": "record scale factor"},
-    "scaled_pga": {"units": "m s-2", "long_name": "peak ground acceleration as analysed",
-                   "comment": "pga * scale_factor (times the scale dimension, if any)"},
-    "record_dt": {"units": "s", "long_name": "record time step"},
-    "cor": {"units": "1", "long_name": "coefficient of restitution"},
-    "scale": {"units": "1", "long_name": "extra scale on the record's scale factor"},
-    "impact": {"long_name": "impact law"},
-    "damping": {"units": "1", "long_name": "damping ratio of the flexible supports"},
-    "history": {"long_name": "cell with time histories"},
-    "history_wall": {"long_name": "wall of the history cell"},
-    "history_diaphragm": {"long_name": "diaphragm of the history cell"},
-    "history_record": {"long_name": "record of the history cell"},
-    "history_cor": {"units": "1", "long_name": "coefficient of restitution of the history cell"},
-    "history_dt": {"units": "s", "long_name": "record time step of the history cell",
-                   "comment": "histories of records with a coarser step than the time axis "
-                              "are linearly interpolated onto it (pattern: held)"},
-}
-
 
 # ---- records --------------------------------------------------------------------------------
 
@@ -177,6 +142,31 @@ def _task(study: Study, batch: Batch, records: dict[str, RecordData],
                                ).hexdigest()[:20]
     return task
 
+
+def batch_tasks(study: Study, records: dict[str, RecordData], batch_size: int = 16,
+                kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
+    """The batches of a study grid, each with the task a worker runs (:func:`run_batch`).
+
+    Parameters
+    ----------
+    study : Study
+        The grid.
+    records : dict of RecordData
+        The study's records by id (:func:`resolve_records`).
+    batch_size : int
+        Target number of analyses per batch (walls are grouped to reach it). [1]
+    kernel : callable, optional
+        Integrator with the signature of `urmx.kernel.run` (default).
+
+    Returns
+    -------
+    list of (Batch, dict)
+        Each batch (its ``key`` set to a hash of everything that decides its result) and
+        its task: plain Python and numpy values, picklable, no xarray.
+    """
+    return [(b, _task(study, b, records, kernel)) for b in _batches(study, batch_size)]
+
+
 def _unrun(shape) -> dict[str, np.ndarray]:
     """Output arrays of cells not (yet) run: NaN, INT_FILL for integers, status not_run."""
     out: dict[str, np.ndarray] = {}
@@ -260,24 +250,55 @@ class _Progress:
         sys.stderr.flush()
 
 
-def _client(scheduler: Any):
-    """(client, owned) for a scheduler argument."""
+def local_client(n_workers: int | None = None, threads: bool = False):
+    """A ``distributed.Client`` on a new local cluster.
+
+    Parameters
+    ----------
+    n_workers : int, optional
+        Worker processes of one thread each (default: one per core). The numba kernel
+        holds the GIL, so processes beat threads; the kernel is compiled (or loaded from
+        numba's cache) here first, so the workers load it from the cache.
+    threads : bool
+        One worker in this process with `n_workers` threads instead.
+
+    Returns
+    -------
+    distributed.Client
+        Close it with :func:`close_client`, which also stops the cluster.
+    """
     from distributed import Client, LocalCluster
+
+    n = n_workers or os.cpu_count() or 1
+    if not threads:
+        from .kernel import warm_up
+
+        warm_up()
+    cluster = LocalCluster(n_workers=1 if threads else n, threads_per_worker=n if threads else 1,
+                           processes=not threads, dashboard_address=":0")
+    return Client(cluster)
+
+
+def get_client(scheduler: Any) -> tuple[Any, bool]:
+    """(client, owned) for a `scheduler` argument of :func:`run_study`: a Client is used as
+    it is (owned False); None or "processes" start local worker processes, "threads" a
+    threaded local worker, any other string connects to that scheduler address (owned True:
+    the caller closes it with :func:`close_client`)."""
+    from distributed import Client
 
     if isinstance(scheduler, Client):
         return scheduler, False
     if scheduler in (None, "processes", "threads"):
-        processes = scheduler != "threads"
-        if processes:
-            from .kernel import warm_up
-
-            warm_up()  # compile once here; the workers then load numba's cache
-        n = os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n if processes else 1,
-                               threads_per_worker=1 if processes else n,
-                               processes=processes, dashboard_address=":0")
-        return Client(cluster), True
+        return local_client(threads=scheduler == "threads"), True
     return Client(scheduler), True
+
+
+def close_client(client: Any) -> None:
+    """Close a client and the local cluster it started, if any."""
+    cluster = getattr(client, "cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
 
 
 def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], rec_ids: list[str],
@@ -288,7 +309,7 @@ def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], re
         return
     from distributed import as_completed
 
-    client, owned = _client(scheduler)
+    client, owned = get_client(scheduler)
     futures = {}
     try:
         acc = {rid: client.scatter(records[rid].acceleration, broadcast=True)
@@ -303,10 +324,45 @@ def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], re
         if owned:
             for f, _ in futures.values():
                 f.cancel()
-            cluster = getattr(client, "cluster", None)
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            close_client(client)
+
+
+def run_grid(study: Study, records: dict[str, RecordData], scheduler: Any = "serial", *,
+             batch_size: int = 16, kernel: Callable | None = None,
+             command: str | None = None) -> xr.Dataset:
+    """Run a study grid in memory: the batches, the scheduler and the Dataset assembly of
+    :func:`run_study`, without its archive (nothing kept on disk, no resume) and with the
+    records given rather than resolved from the manifest.
+
+    Parameters
+    ----------
+    study : Study
+        The grid (e.g. built in code rather than read from a file).
+    records : dict of RecordData
+        Every record the study names, by id.
+    scheduler : "serial", None, "threads", address or distributed.Client
+        As for :func:`run_study` (default here: this process).
+    batch_size : int
+        Target number of analyses per batch. [1]
+    kernel : callable, optional
+        Integrator with the signature of `urmx.kernel.run` (default).
+    command : str, optional
+        Command line for the ``history`` attribute.
+
+    Returns
+    -------
+    xarray.Dataset
+        The same Dataset :func:`run_study` returns.
+    """
+    tasks = batch_tasks(study, records, batch_size, kernel)
+    results: dict[str, dict[str, np.ndarray]] = {}
+
+    def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
+        results[batch.key] = result
+
+    started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
+    _compute(tasks, records, study.records, scheduler, on_result)
+    return _assemble(study, records, tasks, results, started, command)
 
 
 def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None = None,
@@ -342,8 +398,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     if not isinstance(study, Study):
         study = load_study(study)
     records = resolve_records(study, records_dir)
-    batches = _batches(study, batch_size)
-    tasks = [(b, _task(study, b, records, kernel)) for b in batches]
+    tasks = batch_tasks(study, records, batch_size, kernel)
     parts = None
     results: dict[str, dict[str, np.ndarray]] = {}
     started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
@@ -375,7 +430,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     _compute(todo, records, study.records, scheduler, on_result)
     ds = _assemble(study, records, tasks, results, started, command)
     if out is not None:
-        write_archive(ds, out)
+        write_netcdf(ds, out)
         shutil.rmtree(parts, ignore_errors=True)
     return ds
 
@@ -383,7 +438,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
 # ---- the Dataset ----------------------------------------------------------------------------
 
 def _coord(name: str, dims: Any, values: Any) -> xr.Variable:
-    return xr.Variable(dims, values, attrs=dict(COORDS.get(name, {})))
+    return xr.Variable(dims, values, attrs=variables.attrs(name))
 
 
 def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Batch, dict]],
@@ -411,9 +466,8 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
 
     data_vars = {}
     for name, arr in data.items():
-        attrs = dict(variables.attrs(name))
+        attrs = variables.attrs(name)
         if name == "status":
-            attrs.pop("units", None)
             attrs["flag_values"] = np.arange(len(STATUS), dtype=np.int8)
             attrs["flag_meanings"] = " ".join(s.replace("-", "_") for s in STATUS)
         elif name in variables.INTEGER_SCALARS:
@@ -525,35 +579,6 @@ def _on_grid(time: np.ndarray, own: np.ndarray, values: np.ndarray, step: bool) 
         out[inside] = values[idx]
     else:
         out[inside] = np.interp(time[inside], own, values)
-    return out
-
-
-def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
-    """netCDF4 encoding per variable: compressed outputs, no fill value on coordinates."""
-    enc: dict[str, dict[str, Any]] = {}
-    for name, var in ds.variables.items():
-        if var.dtype == object:
-            enc[name] = {}
-        elif name in ds.coords:
-            enc[name] = {"_FillValue": None}
-        elif np.issubdtype(var.dtype, np.integer):
-            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
-        else:
-            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}
-    return enc
-
-
-def write_archive(ds: xr.Dataset, out: str | os.PathLike) -> Path:
-    """Write `ds` as netCDF4 to a temporary name beside `out` and rename it (atomic)."""
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    try:
-        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return out
 
 

@@ -1,4 +1,5 @@
-"""The registry of output variables (``variables.toml``) and the helper that stamps it."""
+"""The registry of variables and coordinates (``variables.toml``) and the helper that
+stamps its attributes on xarray objects."""
 
 from __future__ import annotations
 
@@ -26,27 +27,59 @@ HISTORIES = (
 )
 
 
+FIELDS = ("units", "long_name", "description", "comment")  # attributes an entry may set
+
+
 @lru_cache(maxsize=1)
 def registry() -> dict[str, dict[str, str]]:
-    """name -> {units, long_name, description}."""
+    """name (or ``scope.name``) -> {units, long_name, description, comment}."""
     text = resources.files("urmx").joinpath("variables.toml").read_text(encoding="utf-8")
     return tomllib.loads(text)
 
 
-def attrs(name: str) -> dict[str, str]:
-    """CF attributes (units, long_name, description) of a registered variable."""
-    try:
-        entry = registry()[name]
-    except KeyError:
-        raise KeyError(f"{name!r} is not in urmx's variable registry") from None
-    return {"units": entry["units"], "long_name": entry["long_name"],
-            "description": entry.get("description", "")}
+def attrs(name: str, scope: str | None = None) -> dict[str, str]:
+    """CF attributes of a registered variable or coordinate: ``units`` (absent for ids,
+    strings and flags), ``long_name`` and, where the registry has them, ``description``
+    and ``comment``.
 
+    Parameters
+    ----------
+    name : str
+        Variable or coordinate name.
+    scope : str, optional
+        Where the name appears, for names whose meaning depends on it: the entry
+        ``scope.name`` is used when the registry has one (``attrs("frequency",
+        "spectrum")`` is a spectrum's frequency axis, ``attrs("frequency")`` a diaphragm's
+        frequency).
 
-def stamp(ds):
-    """Set units/long_name/description on every registered variable of an xarray object."""
+    Raises
+    ------
+    KeyError
+        The name is not in the registry.
+    """
     reg = registry()
-    for name in list(ds.variables):
-        if name in reg:
-            ds[name].attrs.update(attrs(name))
-    return ds
+    entry = reg.get(f"{scope}.{name}") if scope else None
+    if entry is None:
+        try:
+            entry = reg[name]
+        except KeyError:
+            raise KeyError(f"{name!r} is not in urmx's variable registry "
+                           "(urmx/variables.toml)") from None
+    return {k: entry[k] for k in FIELDS if k in entry}
+
+
+def stamp(obj, scope: str | None = None):
+    """Set the registry's attributes on every registered variable and coordinate of an
+    xarray Dataset or DataArray (in place; returned for chaining). Names the registry
+    does not know are left as they are."""
+    reg = registry()
+
+    def known(name) -> bool:
+        return name in reg or (scope is not None and f"{scope}.{name}" in reg)
+
+    for name in [*obj.coords, *getattr(obj, "data_vars", ())]:
+        if known(name):
+            obj[name].attrs.update(attrs(name, scope))
+    if not hasattr(obj, "data_vars") and known(obj.name):  # a DataArray itself
+        obj.attrs.update(attrs(obj.name, scope))
+    return obj

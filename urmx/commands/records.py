@@ -44,7 +44,7 @@ def _run(args) -> int:
                   + ("  [substitute]" if e.get("substitute") else ""))
         return 0
     if args.action == "show":
-        from urmx.records import G, measures, scale
+        from urmx.records import STANDARD_GRAVITY, measures, scale
 
         tr = _trace(args.id, args.records)
         if args.scaled:
@@ -53,7 +53,8 @@ def _run(args) -> int:
         print(f"{args.id}: {tr.stats.record.file} ({tr.stats.record.format}), "
               f"dt {tr.stats.delta:g} s, {tr.stats.npts} points")
         for name, var in ds.data_vars.items():
-            extra = f"  ({float(var) / G:.4f} g)" if var.attrs["units"] == "m s-2" else ""
+            in_g = var.attrs["units"] == "m s-2"
+            extra = f"  ({float(var) / STANDARD_GRAVITY:.4f} g)" if in_g else ""
             print(f"  {name:28s} {float(var):12.5g} {var.attrs['units']:6s}{extra}")
         print("processing:")
         for step in tr.stats.processing:

@@ -16,9 +16,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    import matplotlib
-
-    matplotlib.use("Agg")
     from urmx.report import write_report
 
     path = write_report(args.archives, args.out)

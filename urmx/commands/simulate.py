@@ -71,7 +71,9 @@ def _table(ds) -> str:
 
 
 def _run(args) -> int:
-    from urmx.simulation import read_wall, simulate, write_netcdf
+    from urmx.catalog import read_wall
+    from urmx.netcdf import write_netcdf
+    from urmx.simulation import simulate
 
     wall = read_wall(args.wall)
     trace = _trace(args.record, args.dt, args.unit, args.records)
@@ -87,41 +89,8 @@ def _run(args) -> int:
     if args.out:
         print(f"wrote {write_netcdf(ds, args.out)}")
     if args.plot:
-        print(f"wrote {plot_simulation(ds, args.plot)}")
+        from urmx.plot import plot_simulation
+
+        plot_simulation(ds)[0].figure.savefig(args.plot, dpi=120)
+        print(f"wrote {args.plot}")
     return 0
-
-
-def plot_simulation(ds, out):
-    """Two panels over time: top, crack and base displacement [mm]; the rocking pattern."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    t = ds["time"].values
-    fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5),
-                                   gridspec_kw={"height_ratios": (3, 1)})
-    for name, colour in (("top_displacement", "C0"), ("crack_displacement", "C1"),
-                         ("base_displacement", "C2")):
-        ax1.plot(t, 1e3 * ds[name].values, color=colour, lw=0.9,
-                 label=ds[name].attrs["long_name"])
-    ax1.set_ylabel("displacement relative to ground [mm]")
-    ax1.legend(loc="upper right", fontsize="small")
-    ax1.grid(alpha=0.3)
-    levels = np.array([0, 11, 12, 21, 22])  # 0 after a stop
-    ax2.step(t, np.searchsorted(levels, ds["pattern"].values), where="post", color="k", lw=0.9)
-    ax2.set_yticks(range(levels.size), [str(v) for v in levels])
-    ax2.set_ylabel(ds["pattern"].attrs["long_name"])
-    ax2.set_xlabel(f"{ds['time'].attrs['long_name']} [{ds['time'].attrs['units']}]")
-    ax2.grid(alpha=0.3)
-    if int(ds["collapsed"]):
-        for ax in (ax1, ax2):
-            ax.axvline(float(ds["collapse_time"]), color="r", ls="--", lw=0.8)
-    fig.suptitle(f"status {ds.attrs['status']}, scale {ds.attrs['scale']:g}, "
-                 f"cor {ds.attrs['cor']:g}, peak u_t "
-                 f"{1e3 * float(ds['peak_top_displacement']):.1f} mm")
-    fig.tight_layout()
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out

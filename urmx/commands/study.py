@@ -54,16 +54,15 @@ def _run(args) -> int:
 
 
 def _paper(args) -> int:
-    from distributed import Client
-
-    from ..study import _client, run_study
+    from ..report import write_report
+    from ..study import close_client, get_client, run_study
 
     out = Path(args.out)
     start = time.perf_counter()
     archives = []
     client, owned = (None, False)
     if args.scheduler != "serial":
-        client, owned = _client(args.scheduler)  # one cluster for all three studies
+        client, owned = get_client(args.scheduler)  # one cluster for all three studies
     try:
         for name in PAPER_STUDIES:
             path = out / f"{name}.nc"
@@ -73,18 +72,9 @@ def _paper(args) -> int:
                       records_dir=args.records, command=_command())
             archives.append(path)
     finally:
-        if owned and isinstance(client, Client):
-            cluster = getattr(client, "cluster", None)
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        if owned:
+            close_client(client)
     print(f"urmx paper: studies done in {time.perf_counter() - start:.1f} s", file=sys.stderr)
-    try:
-        from ..report import write_report
-    except ImportError:
-        print("urmx paper: urmx.report.write_report is not available yet; the archives are in "
-              f"{out}/ (run the report step when it lands)", file=sys.stderr)
-        return 0
     report = write_report(archives, args.report)
     print(f"urmx paper: done in {time.perf_counter() - start:.1f} s: archives in {out}/, "
           f"report {report}", file=sys.stderr)

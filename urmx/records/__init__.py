@@ -33,14 +33,14 @@ from .measures import (
     significant_frequency_range,
 )
 from .processing import bandpass, baseline, process, resample, scale, taper
-from .readers import FORMATS, UNIT_FACTORS, G, detect_format, read
+from .readers import FORMATS, STANDARD_GRAVITY, UNIT_FACTORS, detect_format, read
 
 __all__ = [
     "read", "detect_format", "load", "manifest", "measures", "response_spectrum",
     "fourier_spectrum", "significant_frequency_range", "significant_duration",
     "predominant_frequency", "arias_history", "sdof_displacement",
     "baseline", "taper", "bandpass", "resample", "scale", "process",
-    "FORMATS", "UNIT_FACTORS", "G",
+    "FORMATS", "UNIT_FACTORS", "STANDARD_GRAVITY",
     "RecordError", "UnknownFormatError", "TruncatedRecordError", "PointCountError",
     "NonFiniteError", "RecordUnitError", "MissingTimeStepError", "UnsupportedRecordError",
     "ChecksumError", "ManifestError",

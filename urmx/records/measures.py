@@ -1,7 +1,8 @@
 """Ground-motion measures: peaks, Arias intensity, durations, spectra.
 
 Numpy/numba cores (``_nigam_jennings_peaks``, ``_fas``) with a labelled xarray shell.
-All quantities SI; "g" appears only in labels.
+All quantities SI; "g" appears only in labels. Units and long names come from the
+variable registry (``urmx/variables.toml``).
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ import numba
 import numpy as np
 import xarray as xr
 
-from .readers import G
+from ..variables import attrs, stamp
+from .readers import STANDARD_GRAVITY
 
 #: default periods of the response spectrum [s]
 DEFAULT_PERIODS = np.unique(np.concatenate([np.geomspace(0.02, 10.0, 120), [0.05, 0.1, 0.2,
@@ -35,7 +37,7 @@ def _cumtrapz(y, dt):
 def arias_history(trace) -> np.ndarray:
     """Cumulative Arias intensity ``pi / (2 g) * integral a^2 dt`` at each sample [m s-1]."""
     acc, dt = _series(trace)
-    return np.pi / (2.0 * G) * _cumtrapz(acc * acc, dt)
+    return np.pi / (2.0 * STANDARD_GRAVITY) * _cumtrapz(acc * acc, dt)
 
 
 def _crossing(t, y, level):
@@ -102,11 +104,10 @@ def fourier_spectrum(trace, frequencies=None, bandwidth: float = 40.0) -> xr.Dat
     # below two FFT bins the smoothed spectrum is not resolved by the record length
     centres = centres[(centres >= 2.0 / (acc.size * dt)) & (centres <= 0.5 / dt)]
     smooth = _konno_ohmachi(freq, amp, centres, bandwidth)
-    return xr.DataArray(
-        smooth, dims="frequency", name="fourier_amplitude",
-        coords={"frequency": ("frequency", centres, {"units": "Hz", "long_name": "frequency"})},
-        attrs={"units": "m s-1", "long_name": "Fourier amplitude of acceleration",
-               "smoothing": f"Konno-Ohmachi b={bandwidth:g}"})
+    fas = xr.DataArray(smooth, dims="frequency", name="fourier_amplitude",
+                       coords={"frequency": centres},
+                       attrs={"smoothing": f"Konno-Ohmachi b={bandwidth:g}"})
+    return stamp(fas, scope="spectrum")
 
 
 def significant_frequency_range(trace, low: float = 0.05, high: float = 0.95):
@@ -265,33 +266,13 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     w[pos] = omega
     psa = np.where(pos, w * w * sd, pga)
     ds = xr.Dataset(
-        {"sd": ("period", sd, {"units": "m", "long_name": "spectral displacement"}),
-         "psv": ("period", w * sd, {"units": "m s-1", "long_name": "pseudo-spectral velocity"}),
-         "psa": ("period", psa, {"units": "m s-2",
-                                 "long_name": "pseudo-spectral acceleration"}),
-         "sa": ("period", sa, {"units": "m s-2",
-                               "long_name": "absolute spectral acceleration"})},
-        coords={"period": ("period", periods, {"units": "s", "long_name": "natural period"})},
+        {"sd": ("period", sd), "psv": ("period", w * sd), "psa": ("period", psa),
+         "sa": ("period", sa)}, coords={"period": periods},
         attrs={"damping": damping, "method": "Nigam-Jennings exact piecewise-linear recursion"})
-    return ds
+    return stamp(ds, scope="spectrum")
 
 
 # -- all scalar measures ---------------------------------------------------------------
-
-_MEASURES = {
-    "pga": ("m s-2", "peak ground acceleration"),
-    "pgv": ("m s-1", "peak ground velocity"),
-    "pgd": ("m", "peak ground displacement"),
-    "arias_intensity": ("m s-1", "Arias intensity"),
-    "significant_duration": ("s", "5-95 % significant duration (Arias)"),
-    "cav": ("m s-1", "cumulative absolute velocity"),
-    "rms_acceleration": ("m s-2", "root-mean-square acceleration over D5-95"),
-    "significant_frequency_low": ("Hz", "lower bound of the significant frequency range"),
-    "significant_frequency_high": ("Hz", "upper bound of the significant frequency range"),
-    "predominant_frequency": ("Hz", "peak of the smoothed Fourier amplitude spectrum"),
-    "duration": ("s", "record length"),
-    "dt": ("s", "time step"),
-}
 
 
 def measures(trace) -> xr.Dataset:
@@ -317,7 +298,7 @@ def measures(trace) -> xr.Dataset:
     acc, dt = _series(trace)
     vel = _cumtrapz(acc, dt)
     dis = _cumtrapz(vel, dt)
-    ia = np.pi / (2.0 * G) * _cumtrapz(acc * acc, dt)
+    ia = np.pi / (2.0 * STANDARD_GRAVITY) * _cumtrapz(acc * acc, dt)
     t = np.arange(acc.size) * dt
     t5, t95 = _crossing(t, ia, 0.05 * ia[-1]), _crossing(t, ia, 0.95 * ia[-1])
     win = (t >= t5) & (t <= t95)
@@ -331,7 +312,6 @@ def measures(trace) -> xr.Dataset:
         "predominant_frequency": predominant_frequency(trace),
         "duration": (acc.size - 1) * dt, "dt": dt,
     }
-    ds = xr.Dataset({k: ((), float(v), {"units": _MEASURES[k][0], "long_name": _MEASURES[k][1]})
-                     for k, v in values.items()})
+    ds = xr.Dataset({k: ((), float(v), attrs(k)) for k, v in values.items()})
     ds.attrs["trace"] = trace.id
     return ds

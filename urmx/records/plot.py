@@ -7,7 +7,7 @@ import os
 import numpy as np
 
 from .measures import fourier_spectrum, response_spectrum, significant_frequency_range
-from .readers import G
+from .readers import STANDARD_GRAVITY
 
 
 def _label(da) -> str:
@@ -33,25 +33,25 @@ def plot_record(trace, out: str | os.PathLike | None = None, title: str | None =
     Returns
     -------
     matplotlib.figure.Figure
+        Drawn without pyplot (the plotting backend is left as it is).
     """
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    g = STANDARD_GRAVITY
     acc = np.asarray(trace.data, dtype=float)
     t = np.arange(acc.size) * trace.stats.delta
     fas = fourier_spectrum(trace)
     rs = response_spectrum(trace)
     f_lo, f_hi = significant_frequency_range(trace)
 
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9), layout="constrained")
+    fig = Figure(figsize=(8, 9), layout="constrained")
+    axes = fig.subplots(3, 1)
     ax = axes[0]
-    ax.plot(t, acc / G, lw=0.6, color="k")
+    ax.plot(t, acc / g, lw=0.6, color="k")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("acceleration [g]")
     k = int(np.argmax(np.abs(acc)))
-    ax.annotate(f"PGA {abs(acc[k]) / G:.3f} g", (t[k], acc[k] / G), fontsize=8)
+    ax.annotate(f"PGA {abs(acc[k]) / g:.3f} g", (t[k], acc[k] / g), fontsize=8)
 
     ax = axes[1]
     ax.loglog(fas.frequency, fas, color="k", lw=1)
@@ -65,7 +65,7 @@ def plot_record(trace, out: str | os.PathLike | None = None, title: str | None =
     ax.legend(fontsize=8, loc="lower left")
 
     ax = axes[2]
-    ax.plot(rs.period, rs.psa / G, color="k")
+    ax.plot(rs.period, rs.psa / g, color="k")
     ax.set_xscale("log")
     ax.set_xlabel(_label(rs.period))
     ax.set_ylabel(f"PSA, {rs.attrs['damping']:.0%} damping [g]")

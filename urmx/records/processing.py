@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .readers import G
+from .readers import STANDARD_GRAVITY
 
 
 def baseline(trace, order: int = 0):
@@ -91,9 +91,9 @@ def scale(trace, factor: float | None = None, target_pga: float | None = None):
         factor = target_pga / pga
     tr.data = tr.data * factor
     tr.stats.scale_factor = float(factor) * float(trace.stats.get("scale_factor", 1.0))
-    tr.stats.processing.append(
-        f"urmx.records.scale: x {factor:.6g}" +
-        (f" (target PGA {target_pga:.6g} m/s2 = {target_pga / G:.4f} g)" if target_pga else ""))
+    target = (f" (target PGA {target_pga:.6g} m/s2 = {target_pga / STANDARD_GRAVITY:.4f} g)"
+              if target_pga else "")
+    tr.stats.processing.append(f"urmx.records.scale: x {factor:.6g}" + target)
     return tr
 
 

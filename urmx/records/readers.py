@@ -36,16 +36,16 @@ from .errors import (
     UnsupportedRecordError,
 )
 
-G = 9.80665  # standard gravity [m s-2]
+STANDARD_GRAVITY = 9.80665  # standard gravity [m s-2], for records in units of g
 
 #: factors from the units accepted by :func:`read` (and found in headers) to m s-2
 UNIT_FACTORS = {
-    "g": G,
+    "g": STANDARD_GRAVITY,
     "m/s2": 1.0,
     "cm/s2": 0.01,
     "mm/s2": 0.001,
 }
-_HEADER_UNITS = {**UNIT_FACTORS, "g/10": G / 10.0, "um/s2": 1e-6}
+_HEADER_UNITS = {**UNIT_FACTORS, "g/10": STANDARD_GRAVITY / 10.0, "um/s2": 1e-6}
 
 #: largest believable peak ground acceleration [g]; above it the unit is surely wrong
 MAX_PLAUSIBLE_PGA_G = 10.0
@@ -620,7 +620,7 @@ def _to_trace(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | 
     data = values * factor
     if file_unit != "m/s2":
         processing.append(f"urmx: unit {file_unit} -> m/s2 (x {factor:g})")
-    pga_g = float(np.max(np.abs(data))) / G
+    pga_g = float(np.max(np.abs(data))) / STANDARD_GRAVITY
     if pga_g > MAX_PLAUSIBLE_PGA_G:
         hint = " (values look like cm/s2 or mm/s2)" if file_unit in ("g", "m/s2") else ""
         raise RecordUnitError(path, f"{label} would have PGA {pga_g:.1f} g with unit "

@@ -27,7 +27,7 @@ from numba.core import caching, config
 
 HERE = Path(__file__).resolve().parent
 # every urmx module that defines compiled (numba) functions
-COMPILED_MODULES = ("_jit.py", "model.py", "kernel.py")
+COMPILED_MODULES = ("jitcache.py", "model.py", "kernel.py")
 
 
 def source_hash() -> str:

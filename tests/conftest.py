@@ -1,0 +1,57 @@
+"""Shared fixtures: the records folder (a missing folder fails under CI, skips elsewhere),
+the synthetic study Datasets, and factories for walls and study files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from urmx.guard import benchmark_wall
+
+from .fixtures import studies
+from .fixtures.records import records_folder
+
+
+@pytest.fixture(scope="session")
+def records_dir() -> Path:
+    """The ground-motion records folder (``$URMX_RECORDS``); when it is missing the test
+    fails if the environment variable ``CI`` is set and skips otherwise."""
+    return records_folder()
+
+
+@pytest.fixture(scope="module")
+def single():
+    """The synthetic single-storey study (`tests.fixtures.studies.single_storey`)."""
+    return studies.single_storey()
+
+
+@pytest.fixture(scope="module")
+def multi():
+    """The synthetic higher-storey study (`tests.fixtures.studies.multi_storey`)."""
+    return studies.multi_storey()
+
+
+@pytest.fixture(scope="module")
+def verif():
+    """The synthetic verification study (`tests.fixtures.studies.verification`)."""
+    return studies.verification()
+
+
+@pytest.fixture(scope="session")
+def make_wall():
+    """Factory: the benchmark wall (b 0.23 m, h 4.14 m, rigid base, top diaphragm
+    815 kN/m, 20 t, 12 %), with any `urmx.Wall` fields replaced: ``make_wall(cor=...)``."""
+    return benchmark_wall
+
+
+@pytest.fixture
+def make_study(tmp_path):
+    """Factory: write a study file from its TOML text into the test's temporary folder
+    and return its path: ``make_study(text, name="study.toml")``."""
+    def make(text: str, name: str = "study.toml") -> Path:
+        path = tmp_path / name
+        path.write_text(text, encoding="utf-8")
+        return path
+
+    return make

@@ -1,0 +1,48 @@
+"""The one netCDF writer: every archive urmx writes (a study, one analysis) goes through
+:func:`write_netcdf`, atomically."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+
+def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
+    """netCDF4 encoding per variable: compressed outputs (NaN the fill value of floats, none
+    for integers), no fill value on coordinates, strings as they are."""
+    enc: dict[str, dict[str, Any]] = {}
+    for name, var in ds.variables.items():
+        if var.dtype == object:
+            enc[name] = {}
+        elif name in ds.coords:
+            enc[name] = {"_FillValue": None}
+        elif np.issubdtype(var.dtype, np.integer):
+            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
+        else:
+            enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}
+    return enc
+
+
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write `ds` as netCDF4 to a temporary name beside `path` and rename it, so an
+    interrupted write never leaves a broken file; parent folders are created.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path

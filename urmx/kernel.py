@@ -79,15 +79,21 @@ from .model import (
     HELD_NONE,
     P_A1,
     P_A2,
+    P_CASE,
+    P_CB,
+    P_CT,
+    P_KDB,
+    P_KDT,
     P_RIGID_B,
     P_RIGID_T,
     Wall,
+    branch_coeffs,
     classify,
     curve,
+    full_mass,
     held_map,
     lower_case,
     n_dof,
-    system,
     transform,
 )
 
@@ -139,7 +145,7 @@ REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, consta
 
 # ---- shared event semantics -----------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _rowdot(A, i, x):
     """Row i of a padded matrix times a padded vector (no array view is created)."""
     out = 0.0
@@ -148,7 +154,7 @@ def _rowdot(A, i, x):
     return out
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def mode_index(h, fam, bl, bu, bla):
     """Index of a piece's tables: held state h, family, lower, upper and other-family
     lower branch (the last only with a held crack joint)."""
@@ -173,7 +179,7 @@ def piece_key(mid: int) -> tuple[int, int, int, int, int]:
     return 3, mid - 310 + 1, 0, 0, 0
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, s, kp, kd, tg):
     """Event function k: e = s*(L[lrow] . y) + kp, falling through zero fires event kd."""
     for j in range(NP):
@@ -187,26 +193,7 @@ def _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, s, kp, kd, tg):
     return k + 1
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, vrows, agc,
-                   sig, kap, kind, tgt):
-    """Event functions bounding the signed branch b of a curve on row L[lrow]; signed
-    boundaries, so passing through zero is never missed (MODEL.md section 11)."""
-    M0, th0, Mi, ta, tb = curve(P, case)
-    if b == 0:
-        k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, -1.0, ta, kind_branch, 1)
-        return _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, 1.0, ta, kind_branch,
-                    -1)
-    sg = 1 if b > 0 else -1
-    inner = ta if abs(b) == 1 else tb
-    outer = tb if abs(b) == 1 else th0
-    k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, float(sg), -inner,
-             kind_branch, 0 if abs(b) == 1 else sg)
-    return _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, float(-sg), outer,
-                kind_branch if abs(b) == 1 else kind_collapse, 2 * sg)
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _branch_bounds(P, case, b, collapse):
     """Interval of theta of the signed branch b: (low, high); the softening branch ends at
     theta0 when `collapse`, else it is continued without end."""
@@ -223,7 +210,21 @@ def _branch_bounds(P, case, b, collapse):
     return -far, -tb
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
+def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, vrows, agc,
+                   sig, kap, kind, tgt):
+    """The two event functions bounding the signed branch b of a curve on row L[lrow]:
+    rising to its upper and falling to its lower boundary (theta0 at the ends: collapse).
+    Signed boundaries, so passing through zero is never missed (MODEL.md section 11)."""
+    lo, hi = _branch_bounds(P, case, b, True)
+    th0 = curve(P, case)[1]
+    k = _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, -1.0, hi,
+             kind_collapse if hi == th0 else kind_branch, b + 1)
+    return _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, 1.0, -lo,
+                kind_collapse if lo == -th0 else kind_branch, b - 1)
+
+
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt):
     """With the crack joint held (theta2 = theta1) the lower curve, the upper curve and
     the other family's lower curve (its release test needs it) all follow theta1: two
@@ -315,7 +316,7 @@ def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
     return k
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def set_family(P, ist, r, v, L):
     """Family from the pivot sides; branches re-classified where the family or the held
     state asks for it. Returns True when |theta1| is at or beyond the new case's theta0
@@ -342,7 +343,7 @@ def set_family(P, ist, r, v, L):
     return changed and abs(th1) >= curve(P, lower_case(fam))[1]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _quad(Minv, L, i, j):
     """L[i] . Minv . L[j] over padded coordinates."""
     out = 0.0
@@ -354,7 +355,7 @@ def _quad(Minv, L, i, j):
     return out
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def impact_velocity(L, v, base, crack, cor, law, Minv, rot):
     """Velocity jump of an impact in padded coordinates.
 
@@ -400,7 +401,7 @@ def impact_velocity(L, v, base, crack, cor, law, Minv, rot):
         v[i] += s
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
     """Relative acceleration of the quantity of row L[lrow] (padded arrays)."""
     out = 0.0
@@ -412,12 +413,12 @@ def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
     return out
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _held_state(ist):
     return (1 if ist[I_BOPEN] == JOINT_HELD else 0) + (2 if ist[I_COPEN] == JOINT_HELD else 0)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _change_coords(GX, h_old, h_new, r, v, tmp):
     """Map a state to the coordinates of another held state (exact: selections)."""
     if h_old == h_new:
@@ -434,7 +435,7 @@ def _change_coords(GX, h_old, h_new, r, v, tmp):
             x[i] = s
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _reset_other(ist, which):
     """A closed or held joint has no side of its own: when joint `which` (0 base, 1 crack)
     opens, is released or changes side while the other is not open, the other's side is
@@ -527,7 +528,8 @@ def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, 
     if hold_b or hold_c:
         counts[2] += 1
         # the residual rate of the held gap is removed by a plastic impulse
-        impact_velocity(L, v, hold_b, hold_c and not rr, 0.0, 1, Minv, GROT[h])
+        impact_velocity(L, v, hold_b, hold_c and not rr, np.float64(0.0), np.int64(1), Minv,
+                        GROT[h])
         if hold_b:
             ist[I_BOPEN] = JOINT_HELD
         if hold_c:
@@ -540,7 +542,7 @@ def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, 
 
 # ---- numerics: Taylor series, scalar polynomials, roots --------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
     """:func:`_taylor` over the first nn coordinates (nn a constant where inlined)."""
     big = 0.0
@@ -591,7 +593,7 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
     return m
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _tail2(MK, MC, h, D, big):
     """The terms D[4:] of :func:`_taylor_n` for two coordinates, two terms a pass.
 
@@ -652,7 +654,7 @@ def _tail2(MK, MC, h, D, big):
     return m
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
     r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays; n reduced coordinates,
@@ -666,7 +668,7 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _sum_state(D, m, s, h, r, v):
     """r(s h) and r_d(s h) from the Taylor coefficients."""
     if s == 1.0:  # the same sums without the products by 1 (half the latency)
@@ -691,7 +693,7 @@ def _sum_state(D, m, s, h, r, v):
         v[i] = dp / h
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of sig*row.y + kap (displacement kind) or of
     row.y_dd + xg_dd (acceleration kind), row = R[ri]. Returns their number."""
@@ -713,7 +715,7 @@ def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     return m - 2
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of a release function sig*(row.y + vrow.y_d + agc*xg_dd)
     + kap on the Taylor series D of one sub-step. Returns their number."""
@@ -730,7 +732,7 @@ def _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig, kap, cf):
     return m
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
@@ -743,7 +745,7 @@ def _peval(cf, m, s):
     return p, dp, 2.0 * ddp
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _peval1(cf, m, s):
     """Polynomial value and first derivative, summed as even and odd parts in s^2
     (four Horner chains of half the length: the evaluation is latency-bound)."""
@@ -762,7 +764,7 @@ def _peval1(cf, m, s):
     return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _newton(cf, m, lo, hi, tol, guess, order):
     """Bracketed Newton for a sign change of the polynomial (order 0, positive at lo, on
     value and slope by :func:`_peval1`) or of its slope (order 1, an extremum, on slope
@@ -800,23 +802,9 @@ def _newton(cf, m, lo, hi, tol, guess, order):
     return a, b
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _root(cf, m, lo, hi, tol, guess):
-    """A root of an event function's polynomial, positive at lo and not at hi:
-    (a, b), f(a) > 0 >= f(b), b - a <= tol (one two-chain evaluation an iteration)."""
-    return _newton(cf, m, lo, hi, tol, guess, 0)
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
-def _solve(cf, m, lo, hi, tol, guess):
-    """An extremum of the polynomial: a root of its slope, which changes sign on
-    [lo, hi]. Returns (a, b) as :func:`_newton` does."""
-    return _newton(cf, m, lo, hi, tol, guess, 1)
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _hermite_root(p0, p1, m0, m1):
-    """A starting point for :func:`_root`: the root in (0, 1] of the cubic Hermite
+    """A starting point for :func:`_newton`: the root in (0, 1] of the cubic Hermite
     interpolant of p0 > 0 >= p1 with end slopes m0, m1 (a few safeguarded Newton steps
     from the secant point)."""
     A = 2.0 * p0 + m0 - 2.0 * p1 + m1
@@ -834,7 +822,7 @@ def _hermite_root(p0, p1, m0, m1):
     return s
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _lower_bound(cf, m):
     """A rigorous lower bound of the polynomial on [0, 1]: c0 - sum_j>=1 |c_j|."""
     out = cf[0]
@@ -843,7 +831,7 @@ def _lower_bound(cf, m):
     return out
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _positive_max(cf, m):
     """For a polynomial starting at or below zero with a positive slope and ending at or
     below zero: the point of its first maximum if that maximum is positive, else -1."""
@@ -854,14 +842,14 @@ def _positive_max(cf, m):
         s = i / ns
         d = _peval(cf, m, s)[1]
         if d_prev > 0.0 and d <= 0.0:
-            a, b = _solve(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s))
+            a, b = _newton(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s), 1)
             sm = 0.5 * (a + b)
             return sm if _peval(cf, m, sm)[0] > 0.0 else -1.0
         d_prev, s_prev = d, s
     return -1.0
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _first_nonpositive(cf, m, single_min):
     """A point s in (0, 1] where the polynomial (positive at 0) is <= 0, at or before
     its first interior minimum that reaches zero; 2.0 when it stays positive.
@@ -869,7 +857,7 @@ def _first_nonpositive(cf, m, single_min):
     single_min: the Hermite test found one interior minimum; otherwise the interval is
     scanned at 16 points and every local minimum between them is located exactly."""
     if single_min:
-        a, b = _solve(cf, m, 0.0, 1.0, 1e-14, 0.5)
+        a, b = _newton(cf, m, 0.0, 1.0, 1e-14, 0.5, 1)
         s = 0.5 * (a + b)
         return s if _peval(cf, m, s)[0] <= 0.0 else 2.0
     ns = 16
@@ -881,7 +869,7 @@ def _first_nonpositive(cf, m, single_min):
         if p <= 0.0:
             return s
         if d_prev < 0.0 and d > 0.0:
-            a, b = _solve(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s))
+            a, b = _newton(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s), 1)
             sm = 0.5 * (a + b)
             if _peval(cf, m, sm)[0] <= 0.0:
                 return sm
@@ -889,7 +877,7 @@ def _first_nonpositive(cf, m, single_min):
     return 2.0
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _hermite_ext(p0, p1, m0, m1):
     """Interior extrema of the cubic Hermite interpolant on [0, 1]: (min, max, s_min,
     s_max); +inf/-inf when none."""
@@ -926,7 +914,7 @@ def _hermite_ext(p0, p1, m0, m1):
 
 # ---- the integrator ---------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
     """:func:`_point` over the first nn coordinates (a constant where inlined)."""
     for i in range(nn):
@@ -957,7 +945,7 @@ def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
         der[t] = b + beta
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
     """Tracker values and rates at one instant (accelerations absolute); acc and jerk
     are scratch arrays. Specialised to n = 2 like :func:`_taylor`."""
@@ -967,13 +955,13 @@ def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
         _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
     """:func:`_point_fast` on the padded loops, for the instants off the hot path."""
     _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
     for i in range(nn):
         s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
@@ -988,7 +976,7 @@ def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
         vb[i] = s2
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
     """The state after a whole sub-step by the exact propagator (rb, vb must not be r, v)."""
     if n == 2:
@@ -997,7 +985,7 @@ def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
         _propagate_n(E, PV, r, v, a0, beta, rb, vb, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
     """The event functions of a piece as signed rows stored by column (RT[i, k] =
     sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
@@ -1018,7 +1006,7 @@ def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
     return rel
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _events_at_n(RT, KP, r, v, e, ed, nn):
     for k in range(MAX_EV):
         a = RT[0, k] * r[0]
@@ -1030,7 +1018,7 @@ def _events_at_n(RT, KP, r, v, e, ed, nn):
         ed[k] = b
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _events_at(RT, KP, r, v, e, ed, n):
     """Values and rates of all MAX_EV event functions at state (r, v)."""
     if n == 2:
@@ -1039,13 +1027,13 @@ def _events_at(RT, KP, r, v, e, ed, n):
         _events_at_n(RT, KP, r, v, e, ed, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _events_now(RT, KP, r, v, e, ed):
     """:func:`_events_at` on the padded loops, for the instants off the hot path."""
     _events_at_n(RT, KP, r, v, e, ed, NP)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=False, _nrt=False, error_model="numpy")
 def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
     """The rate and ground terms of release functions, added to e and ed (held pieces)."""
     for k in range(MAX_EV):
@@ -1061,7 +1049,7 @@ def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
         ed[k] += b
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
     """False when no event function can have an event on the sub-step: none ends at
     or below zero, no closed contact may open, none dips towards zero."""
@@ -1072,7 +1060,7 @@ def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
     return flag
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", inline='always')
+@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
 def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
                 MG, r, v, a0, beta, H, n):
     """Peak update over [0, s_end*H] of a sub-step of length H from the end values and
@@ -1098,7 +1086,7 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
             m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
         mc = _scalar_poly(TR, t, D, m_taylor, t >= N_DISP, H, a0, beta, 1.0, 0.0, cf)
         guess = s_end * (slo if abs(lo) >= abs(hi) else shi)
-        lo_, hi_ = _solve(cf, mc, 0.0, s_end, 1e-13, guess)
+        lo_, hi_ = _newton(cf, mc, 0.0, s_end, 1e-13, guess, 1)
         x = abs(_peval(cf, mc, 0.5 * (lo_ + hi_))[0])
         if x > peaks[t]:
             peaks[t] = x
@@ -1300,7 +1288,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                     guess = _hermite_root(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
                 else:
                     guess = 0.5 * (s_lo + s_hi)
-                lo_, hi_ = _root(cf, mc, s_lo, s_hi, tol, guess)
+                lo_, hi_ = _newton(cf, mc, s_lo, s_hi, tol, guess, 0)
                 s_root = hi_  # the side where the event function has crossed
                 if s_root < s_ev or k_ev < 0:
                     s_ev = s_root
@@ -1450,11 +1438,15 @@ def watch_rows(P: np.ndarray, held: int = HELD_NONE) -> np.ndarray:
     return L
 
 
+def _theta0(P: np.ndarray, case: int) -> float:
+    return float(P[P_CASE + 5 * (case - 1) + 1])
+
+
 def tracker_rows(P: np.ndarray, L: np.ndarray, fam: int) -> np.ndarray:
     """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
     a1, a2 = P[P_A1], P[P_A2]
-    th0l = curve(P, lower_case(fam))[1]
-    th01 = curve(P, 1)[1]
+    th0l = _theta0(P, 3 if fam == 1 else 2)
+    th01 = _theta0(P, 1)
     return np.array([L[ROW_UB], L[ROW_UC], L[ROW_UT], a1 * L[ROW_T1], a2 * L[ROW_T2],
                      L[ROW_T1] / th0l, L[ROW_T2] / th01, L[ROW_UB], L[ROW_UC], L[ROW_UT]])
 
@@ -1473,7 +1465,6 @@ def geometry(P: np.ndarray) -> tuple:
     GNN = np.zeros(4, np.int64)
     GTR = np.zeros((4, 2, N_TRACK, NP))
     free_ub = P[P_RIGID_B] < 0.5 and P[P_RIGID_T] < 0.5
-    from .model import full_mass
     for h in range(4):
         T = transform(P, h)
         ny = T.shape[1]
@@ -1489,6 +1480,14 @@ def geometry(P: np.ndarray) -> tuple:
             GTR[h, fam - 1] = tracker_rows(P, GL[h], fam)
     GX = np.einsum("bij,ajk->abik", GS, GN)
     return (GL, GN, GX, GMI, GROT, GNN, GTR)
+
+
+def _branch(P: np.ndarray, case: int, theta: float) -> int:
+    """Signed branch of theta on a curve (theta not on a boundary)."""
+    ta, tb = P[P_CASE + 5 * (case - 1) + 3], P[P_CASE + 5 * (case - 1) + 4]
+    a = abs(theta)
+    s = 1 if theta > 0 else -1
+    return 0 if a < ta else (s if a < tb else 2 * s)
 
 
 def _reachable(P: np.ndarray) -> list[tuple[int, int, int, int, int]]:
@@ -1509,14 +1508,12 @@ def _reachable(P: np.ndarray) -> list[tuple[int, int, int, int, int]]:
             elif h == HELD_BOTH:
                 keys.append((h, fam, 0, 0, 0))
             else:
-                cases = (lower_case(fam), 1, lower_case(3 - fam))
-                bounds = sorted({s * curve(P, c)[i] for c in cases for i in (3, 4)
-                                 for s in (1.0, -1.0)})
+                cases = (3 if fam == 1 else 2, 1, 2 if fam == 1 else 3)
+                bounds = sorted({s * P[P_CASE + 5 * (c - 1) + i] for c in cases
+                                 for i in (3, 4) for s in (1.0, -1.0)})
                 pts = [bounds[0] - 1.0, bounds[-1] + 1.0]
                 pts += [0.5 * (a + b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-                for x in pts:
-                    bl, bu, bla = (classify(P, c, x, 0.0) for c in cases)
-                    keys.append((h, fam, bl, bu, bla))
+                keys += [(h, fam, *(_branch(P, c, x) for c in cases)) for x in pts]
     return list(dict.fromkeys(keys))
 
 
@@ -1557,16 +1554,25 @@ class Tables:
         self.rel = np.zeros((NPIECE, 2, 2, REL_W))
         self.pieces = (self.ready, self.nsub, self.mats, self.vecs, self.prop, self.pvec,
                        self.rel)
-        self._free: dict = {}
+        # the parts of the equations every piece shares (MODEL.md section 5)
+        a1, a2 = P[P_A1], P[P_A2]
+        vt = np.array([a1, a2, 1.0])
+        e3 = np.array([0.0, 0.0, 1.0])
+        self._KD = P[P_KDT] * np.outer(vt, vt) + P[P_KDB] * np.outer(e3, e3)
+        self._CD = P[P_CT] * np.outer(vt, vt) + P[P_CB] * np.outer(e3, e3)
+        self._Mf = {f: full_mass(P, f) for f in (1, 2)}
+        self._T = [transform(P, h) for h in range(4)]
+        # resistance on each signed branch, R = k*theta + r0, per case
+        self._branch = {c: np.array([branch_coeffs(P, c, b) for b in range(-2, 3)])
+                        for c in (1, 2, 3)}
         self.build(_reachable(P))
-        f8 = np.float64
         self.work = (
             np.zeros((KMAX, NP)), np.zeros(KMAX), np.zeros(N_IST, np.int64),
             np.zeros((MAX_EV, NP)), np.zeros((MAX_EV, NP)), np.zeros(MAX_EV),
             np.zeros(MAX_EV), np.zeros(MAX_EV), np.zeros(MAX_EV, np.int64),
             np.zeros(MAX_EV, np.int64),
             np.zeros(MAX_EV), np.zeros(MAX_EV), np.zeros(MAX_EV), np.zeros(MAX_EV),
-            np.zeros((NP, MAX_EV)), np.zeros((NP, MAX_EV)), np.zeros(MAX_EV, f8),
+            np.zeros((NP, MAX_EV)), np.zeros((NP, MAX_EV)), np.zeros(MAX_EV),
             np.zeros(MAX_EV), np.zeros(MAX_EV),
             np.zeros(N_TRACK), np.zeros(N_TRACK), np.zeros(N_TRACK), np.zeros(N_TRACK),
             np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP),
@@ -1578,78 +1584,102 @@ class Tables:
         arrays = [*self.geo, *self.pieces, *self.work]
         return int(sum(a.nbytes for a in arrays))
 
-    def _free_system(self, fam: int, bl: int, bu: int):
-        """(Minv, C, K, R0, MinvG) of the support-reduced system with no joint held."""
-        key = (fam, bl, bu)
-        if key not in self._free:
-            M, C, K, R0, MinvG, Minv = system(self.P, fam, bl, bu, HELD_NONE)
-            self._free[key] = (Minv, C, K, R0, MinvG)
-        return self._free[key]
+    def _stiffness(self, h: int, case_l: int, bl, bu):
+        """K and R0 of pieces of held state h over y (stacked over the branch arrays bl,
+        bu of the lower curve `case_l` and the upper curve)."""
+        T = self._T[h]
+        kl, rl = self._branch[case_l][np.asarray(bl) + 2].T
+        ku, ru = self._branch[1][np.asarray(bu) + 2].T
+        K = (T.T @ self._KD @ T)[None] + kl[:, None, None] * np.outer(T[0], T[0])[None] \
+            + ku[:, None, None] * np.outer(T[1], T[1])[None]
+        R0 = rl[:, None] * T[0][None] + ru[:, None] * T[1][None]
+        return K, R0
+
+    def _ground(self, h: int, fam: int, Minv: np.ndarray) -> np.ndarray:
+        """M^-1 G over y; while u_b is a free coordinate its unit vector exactly (MODEL.md
+        section 5: the ground drives u_b alone)."""
+        T = self._T[h]
+        ny = T.shape[1]
+        if self.P[P_RIGID_B] < 0.5 and self.P[P_RIGID_T] < 0.5:
+            out = np.zeros(ny)
+            out[ny - 1] = 1.0  # u_b is the last coordinate of every held state
+            return out
+        return Minv @ (T.T @ self._Mf[fam][:, 2])
 
     def build(self, keys) -> None:
         """Fill the tables of the given pieces (h, fam, bl, bu, bla)."""
-        P, dt = self.P, self.dt
-        groups: dict[int, list] = {}
+        GMI = self.geo[3]
+        groups: dict[tuple[int, int], list] = {}
         for key in keys:
-            h, fam, bl, bu, bla = key
-            mid = mode_index(h, fam, bl, bu, bla)
-            M, C, K, R0, MinvG, Minv = system(P, fam, bl, bu, h)
-            ny = M.shape[0]
-            MK, MC, MR = Minv @ K, Minv @ C, Minv @ R0
-            self.mats[mid, 0] = _pad(MK, (NP, NP))
-            self.mats[mid, 1] = _pad(MC, (NP, NP))
-            self.vecs[mid, 0] = _pad(MR, (NP,))
-            self.vecs[mid, 1] = _pad(MinvG, (NP,))
+            if not self.ready[mode_index.py_func(*key)]:
+                groups.setdefault(key[:2], []).append(key)
+        by_size: dict[int, list] = {}
+        for (h, fam), ks in groups.items():
+            ny = self._T[h].shape[1]
+            mids = np.array([mode_index.py_func(*k) for k in ks])
+            bl, bu, bla = (np.array([k[i] for k in ks]) for i in (2, 3, 4))
+            Minv = GMI[h, fam - 1, :ny, :ny]
+            K, R0 = self._stiffness(h, 3 if fam == 1 else 2, bl, bu)
+            MK = Minv[None] @ K
+            MC = np.broadcast_to(Minv @ (self._T[h].T @ self._CD @ self._T[h]), MK.shape)
+            MR = R0 @ Minv.T
+            MG = np.broadcast_to(self._ground(h, fam, Minv), MR.shape)
+            self.mats[mids, 0, :ny, :ny] = MK
+            self.mats[mids, 1, :ny, :ny] = MC
+            self.vecs[mids, 0, :ny] = MR
+            self.vecs[mids, 1, :ny] = MG
             if h != HELD_NONE:
-                self.rel[mid] = self._release_rows(h, fam, bl, bu, bla)
-            groups.setdefault(ny, []).append((mid, MK, MC, MR, MinvG))
-        for ny, items in groups.items():
-            self._propagators(ny, items, dt)
-        for key in keys:
-            self.ready[mode_index(*key)] = True
+                self.rel[mids] = self._release_rows(h, fam, bl, bu, bla)
+            by_size.setdefault(ny, []).append((mids, MK, MC, MR, MG))
+        for ny, items in by_size.items():
+            self._propagators(ny, *(np.concatenate(x) for x in zip(*items, strict=True)))
+        for ks in groups.values():
+            self.ready[[mode_index.py_func(*k) for k in ks]] = True
 
     def _release_rows(self, h, fam, bl, bu, bla) -> np.ndarray:
         """Unconstrained acceleration of each held joint's gap under each family, as rows
-        on y and y_d, a ground coefficient and a constant (MODEL.md section 4)."""
+        on y and y_d, a ground coefficient and a constant (MODEL.md section 4), stacked
+        over the pieces (branch arrays bl, bu, bla)."""
         P = self.P
         n = self.nfull
         Lr = watch_rows(P, HELD_NONE)[:, :n]
         N = held_map(P, h)
-        out = np.zeros((2, 2, REL_W))
+        ny = N.shape[1]
+        T0 = self._T[HELD_NONE]
+        out = np.zeros((len(bl), 2, 2, REL_W))
+        held_theta1 = h in (HELD_BASE, HELD_BOTH)
         for f in (1, 2):
-            bl_f = bl if f == fam else bla
-            if h in (HELD_BASE, HELD_BOTH):
-                bl_f = 0
-            Minv, C, K, R0, MinvG = self._free_system(f, bl_f, 0 if h == HELD_BOTH else bu)
+            bl_f = np.zeros_like(bl) if held_theta1 else (bl if f == fam else bla)
+            bu_f = np.zeros_like(bu) if h == HELD_BOTH else bu
+            K, R0 = self._stiffness(HELD_NONE, 3 if f == 1 else 2, bl_f, bu_f)
+            Minv = self.geo[3][HELD_NONE, f - 1, :n, :n]
+            MinvG = self._ground(HELD_NONE, f, Minv)
+            C = T0.T @ self._CD @ T0
             for which, lrow in ((0, ROW_T1), (1, ROW_GC)):
-                J = Lr[lrow] @ Minv
-                ny = N.shape[1]
-                out[which, f - 1, :ny] = -J @ K @ N
-                out[which, f - 1, NP:NP + ny] = -J @ C @ N
-                out[which, f - 1, 2 * NP] = -Lr[lrow] @ MinvG
-                out[which, f - 1, 2 * NP + 1] = -J @ R0
+                JM = Lr[lrow] @ Minv
+                out[:, which, f - 1, :ny] = -(JM @ K) @ N
+                out[:, which, f - 1, NP:NP + ny] = -(JM @ C @ N)
+                out[:, which, f - 1, 2 * NP] = -Lr[lrow] @ MinvG
+                out[:, which, f - 1, 2 * NP + 1] = -(R0 @ JM)
         return out
 
-    def _propagators(self, ny: int, items: list, dt: float) -> None:
+    def _propagators(self, ny: int, mids, MK, MC, MR, MG) -> None:
         """Sub-step count and exact propagator of pieces with ny coordinates: one matrix
         exponential of [[A, c_R, c_G, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]] (A the
         first-order matrix, c_R and c_G the resistance and ground columns) gives the
         state transition and the responses to the constant, ramp and resistance forcing."""
         m = 2 * ny
-        npc = len(items)
-        A = np.zeros((npc, m, m))
+        npc = len(mids)
         Z = np.zeros((npc, m + 3, m + 3))
-        for i, (_mid, MK, MC, MR, MG) in enumerate(items):
-            A[i, :ny, ny:] = np.eye(ny)
-            A[i, ny:, :ny] = -MK
-            A[i, ny:, ny:] = -MC
-            Z[i, :m, :m] = A[i]
-            Z[i, ny:m, m] = -MR
-            Z[i, ny:m, m + 1] = -MG
-            Z[i, m + 1, m + 2] = 1.0
-        nu = np.abs(np.linalg.eigvals(A)).max(axis=-1) if m else np.zeros(npc)
-        ns = np.maximum(1, np.ceil(nu * dt / RHO)).astype(np.int64)
-        hs = dt / ns
+        Z[:, :ny, ny:m] = np.eye(ny)
+        Z[:, ny:m, :ny] = -MK
+        Z[:, ny:m, ny:m] = -MC
+        Z[:, ny:m, m] = -MR
+        Z[:, ny:m, m + 1] = -MG
+        Z[:, m + 1, m + 2] = 1.0
+        nu = np.abs(np.linalg.eigvals(Z[:, :m, :m])).max(axis=-1) if m else np.zeros(npc)
+        ns = np.maximum(1, np.ceil(nu * self.dt / RHO)).astype(np.int64)
+        hs = self.dt / ns
         # balanced: rates scaled by the sub-step (z = [y, h y_d]), so that |Z h| is about
         # (nu h)^2 <= 1 even for stiff springs (few squarings, no loss of accuracy)
         scale = np.ones((npc, m + 3))
@@ -1657,13 +1687,12 @@ class Tables:
         X = _expm(Z * hs[:, None, None] * scale[:, :, None] / scale[:, None, :])
         X = X / scale[:, :, None] * scale[:, None, :]
         idx = np.r_[np.arange(ny), NP + np.arange(ny)]
-        for i, (mid, *_) in enumerate(items):
-            self.nsub[mid] = ns[i]
-            self.prop[mid] = 0.0
-            self.prop[mid][np.ix_(idx, idx)] = X[i, :m, :m]
-            self.pvec[mid] = 0.0
-            for which in range(3):
-                self.pvec[mid, which, idx] = X[i, :m, m + which]
+        self.nsub[mids] = ns
+        self.prop[mids] = 0.0
+        self.pvec[mids] = 0.0
+        self.prop[np.ix_(mids, idx, idx)] = X[:, :m, :m]
+        for which in range(3):
+            self.pvec[mids[:, None], which, idx[None, :]] = X[:, :m, m + which]
 
 
 # ---- the Python entry point -------------------------------------------------------------

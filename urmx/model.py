@@ -213,23 +213,24 @@ def _pack(w: Wall) -> np.ndarray:
 
 
 # ---- builders shared by the kernel and the reference solver ----------------------------
-# The few functions the integration loop calls at events are compiled (numba); the
-# matrices of the pieces are built once per wall in numpy (they are not in any loop).
+# The few functions the integration loop calls at events are compiled (numba) as part of
+# the kernel's entry points, which alone are cached on disk (urmx.jitcache); the matrices
+# of the pieces are built once per wall in numpy (they are not in any loop).
 
-@njit(cache=True)
+@njit(cache=False)
 def lower_case(family):
     """Segment case of the lower segment: Case 3 in family 1, Case 2 in family 2."""
     return 3 if family == 1 else 2
 
 
-@njit(cache=True)
+@njit(cache=False)
 def curve(P, case):
     """(M0, theta0, Mi, theta_a, theta_b) of a segment case."""
     i = P_CASE + 5 * (case - 1)
     return P[i], P[i + 1], P[i + 2], P[i + 3], P[i + 4]
 
 
-@njit(cache=True)
+@njit(cache=False)
 def classify(P, case, theta, rate):
     """Signed branch of theta on a curve; on a boundary the side it is moving to wins."""
     M0, theta0, Mi, ta, tb = curve(P, case)
@@ -368,7 +369,7 @@ def system(P, family, bl, bu, held=HELD_NONE):
     e3 = np.array([0.0, 0.0, 1.0])
     KD = P[P_KDT] * np.outer(v, v) + P[P_KDB] * np.outer(e3, e3)
     Cq = P[P_CT] * np.outer(v, v) + P[P_CB] * np.outer(e3, e3)
-    k1, r1 = branch_coeffs(P, lower_case(family), bl)
+    k1, r1 = branch_coeffs(P, 3 if family == 1 else 2, bl)
     k2, r2 = branch_coeffs(P, 1, bu)
     KD[0, 0] += k1
     KD[1, 1] += k2

@@ -6,7 +6,7 @@ import numpy as np
 matplotlib.use("Agg")
 
 from fixtures import paper_studies as F  # noqa: E402
-from fixtures.studies import multi_storey, single_storey, verification  # noqa: E402
+from fixtures.studies import multi_storey, single_storey  # noqa: E402
 
 from urmx.cli import main  # noqa: E402
 from urmx.report import study_kind, write_report  # noqa: E402
@@ -48,9 +48,8 @@ def test_full_report(tmp_path):
 def test_figures_in_paper_order_and_units(tmp_path):
     from urmx import analysis as A
     from urmx import plot as P
-    from urmx.report import _paper_order, _record_titles
-
     from urmx.paper import load_paper
+    from urmx.report import _paper_order, _record_titles
 
     ds = F.single()
     assert _paper_order(ds, load_paper()) == ["nahanni", "christchurch", "elcentro"]
@@ -61,9 +60,7 @@ def test_figures_in_paper_order_and_units(tmp_path):
     assert axes[0].get_title().startswith("(a) nahanni")
     labels = [t.get_text() for t in axes[0].get_legend().get_texts()]
     assert "D5 (33 Hz)" in labels and "D5-pinned (pinned)" in labels
-    hist = P.in_display_units(A.verification_histories(verification(), "w08")
-                              if False else A.displacement_histories(
-                                  ds, 4.14, ("D1",), "christchurch"))
+    hist = P.in_display_units(A.displacement_histories(ds, 4.14, ("D1",), "christchurch"))
     assert hist["crack_displacement"].attrs["units"] == "mm"
     assert float(abs(hist["crack_displacement"]).max()) == 50.0
 

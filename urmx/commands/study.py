@@ -6,7 +6,8 @@ import sys
 import time
 from pathlib import Path
 
-PAPER_STUDIES = ("paper-single-storey", "paper-multi-storey", "verification")
+PAPER_STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
+                 "verification-intensity")
 
 
 def register(sub) -> None:
@@ -82,7 +83,7 @@ def _paper(args) -> int:
 
 
 def _calibrate(args) -> int:
-    from ..catalog import calibrate, calibration_report
+    from ..paper import calibrate, calibration_report
 
     result = calibrate()
     b = result.building

@@ -20,6 +20,30 @@ DEFAULT_PERIODS = np.unique(np.concatenate([np.geomspace(0.02, 10.0, 120), [0.05
 DEFAULT_FREQUENCIES = np.geomspace(0.05, 50.0, 300)
 
 
+def as_trace(record):
+    """An :class:`obspy.Trace` from a Trace (returned as it is) or an ``(array, dt)`` pair
+    of acceleration samples [m s-2] and their time step [s]."""
+    if hasattr(record, "stats") and hasattr(record, "data"):
+        return record
+    if isinstance(record, (tuple, list)) and len(record) == 2:
+        from obspy import Trace
+
+        acc, dt = record
+        acc = np.asarray(acc, dtype=float)
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError):
+            raise ValueError(f"dt={dt!r} must be a number of seconds") from None
+        if acc.ndim != 1 or acc.size < 2:
+            raise ValueError(f"acceleration must be a 1-D array of at least 2 samples "
+                             f"(got shape {acc.shape})")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt={dt!r} must be a positive time step in seconds")
+        return Trace(data=acc, header={"delta": dt})
+    raise ValueError(f"expected an obspy Trace or an (array, dt) pair, not "
+                     f"{type(record).__name__}")
+
+
 def _series(trace):
     acc = np.asarray(trace.data, dtype=float)
     return acc, float(trace.stats.delta)
@@ -235,8 +259,8 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
 
     Parameters
     ----------
-    trace : obspy.Trace
-        Ground acceleration [m s-2].
+    trace : obspy.Trace or (array, dt)
+        Ground acceleration [m s-2] (with its time step [s] for an array).
     periods : array_like, optional
         Natural periods [s]; default ``DEFAULT_PERIODS`` (0.02-10 s).
     damping : float
@@ -248,7 +272,7 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
         ``sd`` [m], ``psv`` [m s-1], ``psa`` [m s-2] and ``sa`` (absolute acceleration)
         [m s-2] on dimension ``period`` [s].
     """
-    acc, dt = _series(trace)
+    acc, dt = _series(as_trace(trace))
     periods = np.asarray(DEFAULT_PERIODS if periods is None else periods, dtype=float)
     if np.any(periods < 0):
         raise ValueError("response_spectrum: periods must be >= 0 s")
@@ -294,7 +318,7 @@ _MEASURES = {
 }
 
 
-def measures(trace) -> xr.Dataset:
+def measures(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     """Scalar intensity measures of an acceleration trace.
 
     PGV and PGD come from trapezoidal integration of the trace as given; process
@@ -302,8 +326,13 @@ def measures(trace) -> xr.Dataset:
 
     Parameters
     ----------
-    trace : obspy.Trace
-        Acceleration [m s-2].
+    trace : obspy.Trace or (array, dt)
+        Acceleration [m s-2] (with its time step [s] for an array).
+    periods : array_like, optional
+        Natural periods at which to add the pseudo-spectral acceleration ``psa(period)``
+        (`response_spectrum`; period 0 gives the PGA). [s]
+    damping : float
+        Damping ratio of ``psa``. [1]
 
     Returns
     -------
@@ -312,8 +341,9 @@ def measures(trace) -> xr.Dataset:
         [m s-1], ``significant_duration`` [s], ``cav`` [m s-1], ``rms_acceleration``
         [m s-2], ``significant_frequency_low``/``_high`` [Hz],
         ``predominant_frequency`` [Hz], ``duration`` [s], ``dt`` [s]; each with
-        ``units`` and ``long_name``.
+        ``units`` and ``long_name``; with `periods`, also ``psa(period)`` [m s-2].
     """
+    trace = as_trace(trace)
     acc, dt = _series(trace)
     vel = _cumtrapz(acc, dt)
     dis = _cumtrapz(vel, dt)
@@ -334,4 +364,7 @@ def measures(trace) -> xr.Dataset:
     ds = xr.Dataset({k: ((), float(v), {"units": _MEASURES[k][0], "long_name": _MEASURES[k][1]})
                      for k, v in values.items()})
     ds.attrs["trace"] = trace.id
+    if periods is not None:
+        rs = response_spectrum(trace, np.atleast_1d(np.asarray(periods, dtype=float)), damping)
+        ds["psa"] = rs.psa.assign_attrs(damping=damping)
     return ds

@@ -33,14 +33,21 @@ def registry() -> dict[str, dict[str, str]]:
     return tomllib.loads(text)
 
 
-def attrs(name: str) -> dict[str, str]:
-    """CF attributes (units, long_name, description) of a registered variable."""
+def attrs(name: str, **context: str) -> dict[str, str]:
+    """CF attributes (units, long_name, description) of a registered variable.
+
+    Entries whose units depend on a study setting hold ``{placeholders}`` (the intensity
+    measure's ``{im_units}`` and ``{im_name}``), filled from `context`.
+    """
     try:
         entry = registry()[name]
     except KeyError:
         raise KeyError(f"{name!r} is not in urmx's variable registry") from None
-    return {"units": entry["units"], "long_name": entry["long_name"],
-            "description": entry.get("description", "")}
+    out = {"units": entry["units"], "long_name": entry["long_name"],
+           "description": entry.get("description", "")}
+    if context:
+        out = {k: v.format_map(context) for k, v in out.items()}
+    return out
 
 
 def stamp(ds):

@@ -302,12 +302,12 @@ class CollapseCapacity:
 
 def _positive(name: str, value: Any) -> float:
     try:
-        value = float(value)
+        x = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name}={value!r} must be a number") from None
-    if not (math.isfinite(value) and value > 0):
+    if not (math.isfinite(x) and x > 0):
         raise ValueError(f"{name}={value!r} must be a positive, finite number")
-    return value
+    return x
 
 
 def search(analyse, s_start: float, s_max: float, step: float, rtol: float):
@@ -416,11 +416,15 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = "pga", cor: float = 
     if not isinstance(wall, Wall):
         raise ValueError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
     rtol = _positive("rtol", rtol)
+    if rtol >= 1.0:
+        raise ValueError(f"rtol={rtol!r} must be below 1 (relative width of the bracket)")
     step = _positive("step", step)
     if step <= 1.0:
         raise ValueError(f"step={step!r} must be greater than 1 (the ratio of the hunt's "
                          "geometric grid)")
     rec = as_record(record, records_dir)
+    if not np.any(rec.acceleration):
+        raise ValueError(f"record {rec.id!r} is all zeros: it cannot collapse a wall")
     unit = record_intensity(rec, im, wall)
     max_intensity = _positive("max_intensity", MAX_INTENSITY[im] if max_intensity is None
                               else max_intensity)

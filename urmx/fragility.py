@@ -722,6 +722,13 @@ def run_ida_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]
     return out
 
 
+def _predominant(rec) -> float:
+    from .records import predominant_frequency
+    from .records.measures import as_trace
+
+    return predominant_frequency(as_trace((rec.acceleration, rec.dt)))
+
+
 def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
     """The Dataset of an IDA study: capacities, censoring, IDA curves and the lognormal fits
     per (wall, diaphragm, cor), with the grid's coordinates (`urmx.study`)."""
@@ -792,6 +799,11 @@ def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
     coords["intensity"] = xr.Variable(curve, inten, attrs=attrs("intensity"))
     coords["rocking_period"] = xr.Variable(("wall", "diaphragm"), periods,
                                            attrs=attrs("rocking_period"))
+    coords["predominant_frequency"] = xr.Variable("record", np.array(
+        [_predominant(records[r]) for r in study.records]), attrs={
+        "units": "Hz", "long_name": "predominant frequency of the record",
+        "comment": "peak of the Konno-Ohmachi smoothed Fourier amplitude spectrum "
+                   "(urmx.records.predominant_frequency)"})
     gattrs = _global_attrs(study, started, command)
     gattrs.update({"intensity_measure": ida.im, "ida_rtol": ida.rtol, "ida_step": ida.step,
                    "ida_max_intensity": ida.max_intensity,

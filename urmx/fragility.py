@@ -225,17 +225,24 @@ def record_intensity(record: Any, im: str = "pga", wall: Wall | None = None) -> 
         In the measure's units (`IM_ATTRS`): m s-2, m s-1 or 1.
     """
     _check_im(im)
-    if im == "scale":
-        return 1.0
+    if im in ("sa_wall", "sa_diaphragm") and wall is None:
+        raise ValueError(f"im={im!r} needs the wall (its period)")
     rec = as_record(record)
+    return float(record_intensities(rec.acceleration, rec.dt, im, [wall])[0])
+
+
+def record_intensities(acceleration, dt: float, im: str, walls) -> np.ndarray:
+    """`record_intensity` of one record for several walls at once (one pass of the response
+    spectrum over all their periods). [units of the measure]"""
+    if im == "scale":
+        return np.ones(len(walls))
     if im in ("pga", "pgv"):
         from .records import measures
 
-        return float(measures((rec.acceleration, rec.dt))[im])
-    if wall is None:
-        raise ValueError(f"im={im!r} needs the wall (its period)")
-    period = rocking_period(wall) if im == "sa_wall" else diaphragm_period(wall)
-    return float(spectral_intensities(rec, [period])[0])
+        value = float(measures((acceleration, dt), names=[im])[im])
+        return np.full(len(walls), value)
+    period = rocking_period if im == "sa_wall" else diaphragm_period
+    return spectral_intensities((acceleration, dt), [period(w) for w in walls])
 
 
 def spectral_intensities(record: Any, periods) -> np.ndarray:
@@ -638,28 +645,6 @@ def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]
 
 # ---- the IDA study kind (run by urmx.study.run_study for a study with [study.ida]) -------
 
-def _cell_intensities(study, records) -> tuple[np.ndarray, np.ndarray]:
-    """Intensity of each record at its study scale factor, per (wall, diaphragm, record),
-    and the rocking period of each (wall, diaphragm) cell [s]."""
-    from .records import measures
-
-    im = study.ida.im
-    walls = [[study.wall(w, d) for d in study.diaphragms] for w in study.walls]
-    periods = np.array([[rocking_period(w) for w in row] for row in walls])
-    shape = (len(study.walls), len(study.diaphragms), len(study.records))
-    unit = np.ones(shape)
-    for ir, rid in enumerate(study.records):
-        rec = records[rid]
-        acc = rec.acceleration * rec.scale_factor
-        if im in ("pga", "pgv"):
-            unit[:, :, ir] = float(measures((acc, rec.dt))[im])
-        elif im in ("sa_wall", "sa_diaphragm"):
-            per = periods if im == "sa_wall" else np.array(
-                [[diaphragm_period(w) for w in row] for row in walls])
-            unit[:, :, ir] = spectral_intensities((acc, rec.dt), per.ravel()).reshape(per.shape)
-    return unit, periods
-
-
 def ida_tasks(study, records, batch_size: int = 16, kernel=None) -> list:
     """Batches of an IDA study: up to `batch_size` cells (walls x cor) of one diaphragm and
     one record, each with the hash key of everything that decides its result."""
@@ -669,7 +654,6 @@ def ida_tasks(study, records, batch_size: int = 16, kernel=None) -> list:
     from . import __version__
     from .study import Batch
 
-    unit, _ = _cell_intensities(study, records)
     per = max(1, batch_size // len(study.cor))
     settings = study.ida.to_dict()
     out = []
@@ -680,9 +664,9 @@ def ida_tasks(study, records, batch_size: int = 16, kernel=None) -> list:
             for i in range(0, len(walls), per):
                 batch = Batch(walls[i:i + per], idp, ir)
                 task = dict(walls=[study.wall(study.walls[iw], d) for iw in batch.walls],
-                            unit=[float(unit[iw, idp, ir]) for iw in batch.walls],
                             dt=rec.dt, scale_factor=rec.scale_factor, cor=list(study.cor),
-                            impact=study.impact, ida=settings, kernel=kernel)
+                            impact=study.impact, ida=settings, kernel=kernel,
+                            predominant=idp == 0 and i == 0)
                 ident = dict(task, walls=[w.to_dict() for w in task["walls"]], record=rec.id,
                              record_digest=rec.digest, kind="ida", urmx=__version__,
                              kernel=None if kernel is None
@@ -696,22 +680,28 @@ def ida_tasks(study, records, batch_size: int = 16, kernel=None) -> list:
 def run_ida_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
     """One batch of an IDA study: the collapse capacity of every (wall, cor) cell, as numpy
     arrays (capacity, censored, analyses, event_limits of shape (walls, cor); the IDA points
-    ``intensity`` and ``ratio`` of shape (walls, cor, points), NaN-padded). Numpy only."""
+    ``intensity`` and ``ratio`` of shape (walls, cor, points), NaN-padded; the record's
+    intensity ``unit`` per wall; the record's
+    ``predominant`` frequency when the task asks for it, else NaN). Numpy only."""
     kernel = task["kernel"]
     if kernel is None:
         from .kernel import run as kernel
     acc = np.ascontiguousarray(acceleration * task["scale_factor"], dtype=np.float64)
     ida = task["ida"]
-    shape = (len(task["walls"]), len(task["cor"]))
+    walls = task["walls"]
+    unit = record_intensities(acc, task["dt"], ida["im"], walls)
+    shape = (len(walls), len(task["cor"]))
     results = {}
     for iw, ic in np.ndindex(*shape):
         results[iw, ic] = _capacity(
-            kernel, task["walls"][iw], acc, task["dt"], task["unit"][iw], ida["im"],
-            task["cor"][ic], task["impact"], ida["rtol"], ida["step"], ida["max_intensity"])
+            kernel, walls[iw], acc, task["dt"], float(unit[iw]), ida["im"], task["cor"][ic],
+            task["impact"], ida["rtol"], ida["step"], ida["max_intensity"])
     k = max(r.analyses for r in results.values())
     out = {"capacity": np.full(shape, np.nan), "censored": np.zeros(shape, bool),
            "analyses": np.zeros(shape, np.int32), "event_limits": np.zeros(shape, np.int32),
-           "intensity": np.full((*shape, k), np.nan), "ratio": np.full((*shape, k), np.nan)}
+           "intensity": np.full((*shape, k), np.nan), "ratio": np.full((*shape, k), np.nan),
+           "unit": unit, "predominant": np.array(
+               _predominant(acc, task["dt"]) if task["predominant"] else np.nan)}
     for (iw, ic), r in results.items():
         out["capacity"][iw, ic] = r.capacity
         out["censored"][iw, ic] = r.censored
@@ -722,11 +712,11 @@ def run_ida_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]
     return out
 
 
-def _predominant(rec) -> float:
+def _predominant(acceleration, dt: float) -> float:
     from .records import predominant_frequency
     from .records.measures import as_trace
 
-    return predominant_frequency(as_trace((rec.acceleration, rec.dt)))
+    return predominant_frequency(as_trace((acceleration, dt)))
 
 
 def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
@@ -748,18 +738,24 @@ def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
     lim = np.full(shape, INT_FILL, np.int32)
     inten = np.full((*shape, k), np.nan)
     ratio = np.full((*shape, k), np.nan)
+    unit = np.full(shape[:3], np.nan)
+    periods = np.array([[rocking_period(study.wall(w, d)) for d in study.diaphragms]
+                        for w in study.walls])
+    predominant = np.full(shape[2], np.nan)
     for batch, _ in tasks:
         r = results[batch.key]
         kb = r["intensity"].shape[-1]
+        if np.isfinite(r["predominant"]):
+            predominant[batch.record] = r["predominant"]
         for j, iw in enumerate(batch.walls):
             cell = (iw, batch.diaphragm, batch.record)
+            unit[cell] = r["unit"][j]
             cap[cell] = r["capacity"][j]
             cen[cell] = r["censored"][j]
             count[cell] = r["analyses"][j]
             lim[cell] = r["event_limits"][j]
             inten[cell][..., :kb] = r["intensity"][j]
             ratio[cell][..., :kb] = r["ratio"][j]
-    unit, periods = _cell_intensities(study, records)
     median = np.full((shape[0], shape[1], shape[3]), np.nan)
     disp = np.full_like(median, np.nan)
     for iw, idp, ic in np.ndindex(median.shape):
@@ -799,8 +795,7 @@ def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
     coords["intensity"] = xr.Variable(curve, inten, attrs=attrs("intensity"))
     coords["rocking_period"] = xr.Variable(("wall", "diaphragm"), periods,
                                            attrs=attrs("rocking_period"))
-    coords["predominant_frequency"] = xr.Variable("record", np.array(
-        [_predominant(records[r]) for r in study.records]), attrs={
+    coords["predominant_frequency"] = xr.Variable("record", predominant, attrs={
         "units": "Hz", "long_name": "predominant frequency of the record",
         "comment": "peak of the Konno-Ohmachi smoothed Fourier amplitude spectrum "
                    "(urmx.records.predominant_frequency)"})

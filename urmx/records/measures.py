@@ -6,6 +6,8 @@ All quantities SI; "g" appears only in labels.
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numba
 import numpy as np
 import xarray as xr
@@ -318,7 +320,39 @@ _MEASURES = {
 }
 
 
-def measures(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
+class _Intermediates:
+    """Integrals of a record that several measures share, each computed on first use."""
+
+    def __init__(self, trace, acc, dt):
+        self.trace, self.acc, self.dt = trace, acc, dt
+
+    @cached_property
+    def vel(self):
+        return _cumtrapz(self.acc, self.dt)
+
+    @cached_property
+    def arias(self):
+        return np.pi / (2.0 * G) * _cumtrapz(self.acc * self.acc, self.dt)
+
+    @cached_property
+    def t(self):
+        return np.arange(self.acc.size) * self.dt
+
+    @cached_property
+    def t595(self):
+        ia = self.arias
+        return _crossing(self.t, ia, 0.05 * ia[-1]), _crossing(self.t, ia, 0.95 * ia[-1])
+
+    @cached_property
+    def frequency_range(self):
+        return significant_frequency_range(self.trace)
+
+    def rms(self):
+        win = (self.t >= self.t595[0]) & (self.t <= self.t595[1])
+        return np.sqrt(np.mean(self.acc[win] ** 2)) if win.any() else 0.0
+
+
+def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Dataset:
     """Scalar intensity measures of an acceleration trace.
 
     PGV and PGD come from trapezoidal integration of the trace as given; process
@@ -333,6 +367,9 @@ def measures(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
         (`response_spectrum`; period 0 gives the PGA). [s]
     damping : float
         Damping ratio of ``psa``. [1]
+    names : sequence of str, optional
+        Only these scalar measures (default: all); each is computed only when asked for
+        (``["pga", "pgv"]`` skips the Fourier spectra).
 
     Returns
     -------
@@ -345,24 +382,27 @@ def measures(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     """
     trace = as_trace(trace)
     acc, dt = _series(trace)
-    vel = _cumtrapz(acc, dt)
-    dis = _cumtrapz(vel, dt)
-    ia = np.pi / (2.0 * G) * _cumtrapz(acc * acc, dt)
-    t = np.arange(acc.size) * dt
-    t5, t95 = _crossing(t, ia, 0.05 * ia[-1]), _crossing(t, ia, 0.95 * ia[-1])
-    win = (t >= t5) & (t <= t95)
-    f_lo, f_hi = significant_frequency_range(trace)
-    values = {
-        "pga": np.max(np.abs(acc)), "pgv": np.max(np.abs(vel)), "pgd": np.max(np.abs(dis)),
-        "arias_intensity": ia[-1], "significant_duration": t95 - t5,
-        "cav": np.sum(np.abs(acc)) * dt,
-        "rms_acceleration": np.sqrt(np.mean(acc[win] ** 2)) if win.any() else 0.0,
-        "significant_frequency_low": f_lo, "significant_frequency_high": f_hi,
-        "predominant_frequency": predominant_frequency(trace),
-        "duration": (acc.size - 1) * dt, "dt": dt,
+    if names is None:
+        names = list(_MEASURES)
+    unknown = [n for n in names if n not in _MEASURES]
+    if unknown:
+        raise ValueError(f"unknown measure(s) {', '.join(map(repr, unknown))} (known: "
+                         f"{', '.join(_MEASURES)})")
+    r = _Intermediates(trace, acc, dt)
+    compute = {
+        "pga": lambda: np.max(np.abs(acc)), "pgv": lambda: np.max(np.abs(r.vel)),
+        "pgd": lambda: np.max(np.abs(_cumtrapz(r.vel, dt))),
+        "arias_intensity": lambda: r.arias[-1],
+        "significant_duration": lambda: r.t595[1] - r.t595[0],
+        "cav": lambda: np.sum(np.abs(acc)) * dt, "rms_acceleration": r.rms,
+        "significant_frequency_low": lambda: r.frequency_range[0],
+        "significant_frequency_high": lambda: r.frequency_range[1],
+        "predominant_frequency": lambda: predominant_frequency(trace),
+        "duration": lambda: (acc.size - 1) * dt, "dt": lambda: dt,
     }
-    ds = xr.Dataset({k: ((), float(v), {"units": _MEASURES[k][0], "long_name": _MEASURES[k][1]})
-                     for k, v in values.items()})
+    ds = xr.Dataset({k: ((), float(compute[k]()), {"units": _MEASURES[k][0],
+                                                   "long_name": _MEASURES[k][1]})
+                     for k in names})
     ds.attrs["trace"] = trace.id
     if periods is not None:
         rs = response_spectrum(trace, np.atleast_1d(np.asarray(periods, dtype=float)), damping)

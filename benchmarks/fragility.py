@@ -1,0 +1,313 @@
+"""Benchmark section ``fragility``: collapse capacities of the ``fema-p695-ida`` study.
+
+Measures what the fragility workflow promises:
+
+- analyses per collapse capacity at rtol 1e-3 (target: at most 15 on average);
+- the whole ``fema-p695-ida`` study on 2 local dask worker processes after compilation
+  (target: under 2 minutes), with the number of analyses: compute time on a started and
+  warmed cluster, and end to end as ``urmx ida`` runs it (cluster start included); and the
+  same study in one process, for the speed-up;
+- how the capacities compare with a brute-force scan on a 1 % grid of scale factors for
+  sampled (wall, diaphragm) pairs over all 40 records: the share of cells where the scan
+  finds a collapse below the capacity (a collapse window the search stepped over), how far
+  below, and what that does to the fitted median and dispersion.
+
+Shape of a report section: ``run(quick) -> dict`` (JSON-able) and ``render(dict) ->
+list[str]`` (Markdown lines). Run as a script to store both::
+
+    python benchmarks/fragility.py [--quick] [--out reports/performance]
+
+writes ``fragility.json`` and ``fragility.md`` into the folder. The numbers depend on the
+machine and on its load (the 2 cores may be shared): the section carries the load average
+seen before and after each timing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+TARGET_ANALYSES = 15.0  # mean analyses per collapse capacity at rtol 1e-3
+TARGET_STUDY = 120.0  # whole fema-p695-ida study on 2 cores after compilation [s]
+STUDY = "fema-p695-ida"
+SCAN_STEP = 1.01  # brute-force grid ratio
+SCAN_FROM = 0.25  # brute-force scan from this fraction of the wall's static acceleration
+SCAN_PAIRS = (("s08", "D1"), ("s16", "D2"), ("s24", "D4"), ("s12", "D5"),
+              ("s20", "D1/both"), ("s14", "D3/both"))
+
+
+def _load() -> list[float]:
+    return [round(x, 2) for x in os.getloadavg()]
+
+
+def _machine() -> dict:
+    import numba
+
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                                text=True, cwd=Path(__file__).parent).stdout.strip()
+    except OSError:
+        commit = ""
+    return {"python": platform.python_version(), "numpy": np.__version__,
+            "numba": numba.__version__, "cpus": os.cpu_count(), "machine": platform.machine(),
+            "system": platform.system(), "commit": commit,
+            "date": time.strftime("%Y-%m-%d %H:%M", time.gmtime())}
+
+
+def _small_study(tmp: Path) -> Path:
+    path = tmp / "quick-ida.toml"
+    path.write_text("""
+[study]
+name = "quick-ida"
+walls = ["s08", "s16", "s24"]
+diaphragms = ["D1", "D5", "D2/both"]
+records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
+cor = [0.8]
+[study.ida]
+im = "pga"
+rtol = 1e-3
+step = 1.5
+""")
+    return path
+
+
+def warm_ida() -> None:
+    """Run every compiled function an IDA batch uses once (kernel, model builders, response
+    and Fourier spectra), so that numba's on-disk cache is loaded before timing."""
+    from urmx import fragility as F
+    from urmx.kernel import warm_up
+    from urmx.model import Wall
+
+    warm_up()
+    wall = Wall(0.23, 3.68, 2 / 3, 20000.0, top_mass=12000.0, top_stiffness=815e3,
+                top_damping=0.12)
+    t = np.arange(500) * 0.01
+    acc = np.sin(2 * np.pi * 1.5 * t) * np.exp(-t)
+    task = dict(walls=[wall], dt=0.01, scale_factor=1.0, cor=[0.8], impact="scale",
+                ida=dict(im="sa_wall", rtol=0.1, step=2.0, max_intensity=50.0), kernel=None,
+                predominant=True)
+    F.run_ida_batch(task, acc)
+    F.record_intensities(acc, 0.01, "pgv", [wall])
+
+
+def _cluster(n: int):
+    from distributed import Client, LocalCluster
+
+    warm_ida()  # compiled or loaded from numba's cache here, before the workers start
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                           dashboard_address=":0")
+    client = Client(cluster)
+    client.run(warm_ida)  # every worker loads the compiled code before the clock starts
+    return cluster, client
+
+
+def time_study(study, records_dir=None) -> dict:
+    """The study on a warmed 2-worker cluster, end to end as ``urmx ida`` runs it, and in
+    one process: seconds, analyses, load averages."""
+    from urmx.study import run_study
+
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        cluster, client = _cluster(2)
+        try:
+            load0 = _load()
+            t = time.perf_counter()
+            ds = run_study(study, out=Path(tmp) / "a.nc", scheduler=client, progress=False,
+                           records_dir=records_dir)
+            out["cluster_seconds"] = time.perf_counter() - t
+            out["cluster_load"] = [load0, _load()]
+        finally:
+            client.close()
+            cluster.close()
+        load0 = _load()
+        t = time.perf_counter()
+        run_study(study, out=Path(tmp) / "b.nc", scheduler=None, progress=False,
+                  records_dir=records_dir)
+        out["end_to_end_seconds"] = time.perf_counter() - t
+        out["end_to_end_load"] = [load0, _load()]
+        load0 = _load()
+        t = time.perf_counter()
+        run_study(study, out=Path(tmp) / "c.nc", scheduler="serial", progress=False,
+                  records_dir=records_dir)
+        out["serial_seconds"] = time.perf_counter() - t
+        out["serial_load"] = [load0, _load()]
+    n = ds.analyses.where(ds.analyses >= 0)
+    out.update({
+        "study": ds.attrs["study_name"], "cells": int(n.count()),
+        "analyses": int(n.sum()), "analyses_per_capacity": float(n.mean()),
+        "analyses_median": float(n.median()), "analyses_max": int(n.max()),
+        "analyses_histogram": {str(int(k)): int((n == k).sum())
+                               for k in np.unique(n.values[np.isfinite(n.values)])},
+        "censored": int(ds.censored.sum()), "event_limits": int(ds.event_limits.sum()),
+        "rtol": ds.attrs["ida_rtol"], "step": ds.attrs["ida_step"],
+        "im": ds.attrs["intensity_measure"],
+    })
+    out["analyses_per_second_cluster"] = out["analyses"] / out["cluster_seconds"]
+    return out
+
+
+def brute_force(study, pairs, records: list[str] | None = None) -> dict:
+    """Capacities of the search against a 1 % scan from a quarter of the wall's static
+    acceleration up to the capacity, for every record of the given (wall, diaphragm) pairs;
+    and the lognormal fits with either set of capacities."""
+    from urmx import fragility as F
+    from urmx.kernel import run
+
+    recs = {r: F.as_record(r) for r in (records or study.records)}
+    walls = {w.id: w for w in study.walls}
+    dias = {d.id: d for d in study.diaphragms}
+    cells, fits = [], []
+    t0 = time.perf_counter()
+    for wid, did in pairs:
+        w = study.wall(walls[wid], dias[did])
+        search, scan = [], []
+        for rid, rec in recs.items():
+            res = F.collapse_capacity(w, rec, im=study.ida.im, rtol=study.ida.rtol,
+                                      step=study.ida.step,
+                                      max_intensity=study.ida.max_intensity)
+            pga = float(np.max(np.abs(rec.acceleration)))
+            lo = SCAN_FROM * F.static_acceleration(w)
+            n = max(2, int(math.ceil(math.log(res.capacity / lo) / math.log(SCAN_STEP))))
+            first = res.capacity
+            for x in lo * SCAN_STEP ** np.arange(n):
+                if x >= res.capacity / (1 + study.ida.rtol):
+                    break
+                if run(w, rec.acceleration, rec.dt, scale=x / pga, cor=0.8)["status"] \
+                        == "collapsed":
+                    first = float(x)
+                    break
+            search.append(res.capacity)
+            scan.append(first)
+            cells.append({"wall": wid, "diaphragm": did, "record": rid,
+                          "capacity": res.capacity, "scan_first": first,
+                          "censored": res.censored, "analyses": res.analyses})
+        a, b = F.fit_lognormal(search), F.fit_lognormal(scan)
+        fits.append({"wall": wid, "diaphragm": did, "median_search": a.median,
+                     "median_scan": b.median, "dispersion_search": a.dispersion,
+                     "dispersion_scan": b.dispersion})
+    over = np.array([c["capacity"] / c["scan_first"] for c in cells])
+    missed = over > 1 + 1e-9
+    return {
+        "cells": len(cells), "seconds": time.perf_counter() - t0,
+        "scan_step": SCAN_STEP, "scan_from": SCAN_FROM,
+        "missed": int(missed.sum()), "missed_share": float(missed.mean()),
+        "overshoot_median": float(np.median(over[missed])) if missed.any() else 1.0,
+        "overshoot_p90": float(np.quantile(over[missed], 0.9)) if missed.any() else 1.0,
+        "overshoot_max": float(over.max()),
+        "mean_log_bias": float(np.mean(np.log(over))),
+        "fits": fits, "cell_list": cells,
+    }
+
+
+def run(quick: bool = False) -> dict:
+    """Measure the section (``quick``: a 36-cell study and 2 x 4 brute-force cells, to check
+    the machinery; not the acceptance numbers)."""
+    from urmx.catalog import load_study
+
+    full = load_study(STUDY)
+    with tempfile.TemporaryDirectory() as tmp:
+        study = load_study(_small_study(Path(tmp))) if quick else full
+        data = {"quick": quick, "machine": _machine(), "load_start": _load()}
+        data["study"] = time_study(study)
+    pairs = SCAN_PAIRS[:2] if quick else SCAN_PAIRS
+    data["brute_force"] = brute_force(full, pairs, full.records[:4] if quick else None)
+    data["load_end"] = _load()
+    return data
+
+
+def _yes(ok: bool) -> str:
+    return "**met**" if ok else "**missed**"
+
+
+def render(data: dict) -> list[str]:
+    """Markdown lines of the section."""
+    s, b, m = data["study"], data["brute_force"], data["machine"]
+    per = s["analyses_per_capacity"]
+    mode = " --quick (machinery check, not the acceptance run)" if data["quick"] else ""
+    lines = [
+        "## Collapse fragility (IDA)",
+        "",
+        f"`benchmarks/fragility.py`{mode}"
+        f" on {m['cpus']} CPUs ({m['machine']}, Python {m['python']}, numba {m['numba']}), "
+        f"commit {m['commit']}, {m['date']} UTC; load average (1, 5, 15 min) "
+        f"{data['load_start']} at the start, {data['load_end']} at the end.",
+        "",
+        f"Study `{s['study']}`: {s['cells']} collapse capacities (im {s['im']}, rtol "
+        f"{s['rtol']:g}, hunt step {s['step']:g}), {s['analyses']} analyses, "
+        f"{s['censored']} censored, {s['event_limits']} analyses stopped by the event bound.",
+        "",
+        "| measure | value | target |",
+        "|---|---|---|",
+        f"| analyses per collapse capacity (mean; median; max) | {per:.2f}; "
+        f"{s['analyses_median']:g}; {s['analyses_max']} | <= {TARGET_ANALYSES:g}: "
+        f"{_yes(per <= TARGET_ANALYSES)} |",
+        f"| whole study, 2 worker processes, warmed cluster | {s['cluster_seconds']:.1f} s "
+        f"({s['analyses_per_second_cluster']:.0f} analyses/s); load {s['cluster_load'][0]} "
+        f"-> {s['cluster_load'][1]} | < {TARGET_STUDY:g} s: "
+        f"{_yes(s['cluster_seconds'] < TARGET_STUDY)} |",
+        f"| whole study as `urmx ida` runs it (local cluster started and warmed inside) | "
+        f"{s['end_to_end_seconds']:.1f} s; load {s['end_to_end_load'][0]} -> "
+        f"{s['end_to_end_load'][1]} | |",
+        f"| whole study in one process (serial) | {s['serial_seconds']:.1f} s "
+        f"({s['serial_seconds'] / s['cluster_seconds']:.2f}x the 2-worker time); load "
+        f"{s['serial_load'][0]} -> {s['serial_load'][1]} | |",
+        "",
+        "Analyses per capacity: start at half the wall's static acceleration, hunt up by 1.5 "
+        "to the first collapse (about 1 + 3-4 analyses), bisect the bracket of ratio 1.5 to "
+        "rtol 1e-3 (9 analyses). Histogram (analyses: cells): "
+        + ", ".join(f"{k}: {v}" for k, v in s["analyses_histogram"].items()) + ".",
+        "",
+        "### Capacities against a brute-force scan",
+        "",
+        f"{b['cells']} cells ({len(b['fits'])} wall-diaphragm pairs x their records), each "
+        f"scanned on a {100 * (b['scan_step'] - 1):.0f} % grid of scale factors from "
+        f"{b['scan_from']:g} of the wall's static acceleration up to the capacity "
+        f"({b['seconds']:.0f} s). Rocking walls resurrect: a record that collapses a wall "
+        "may not collapse it when scaled slightly higher, and such collapse windows are "
+        "often narrower than 1 %. The search (about 14 analyses) cannot see windows "
+        "narrower than its steps; the scan finds a collapse below the capacity in "
+        f"**{b['missed']} of {b['cells']} cells ({100 * b['missed_share']:.0f} %)**, "
+        f"there the capacity is {b['overshoot_median']:.3f} times the scan's first collapse "
+        f"(median; 90th percentile {b['overshoot_p90']:.3f}, max {b['overshoot_max']:.3f}); "
+        f"over all cells the mean log-bias is {b['mean_log_bias']:.4f}.",
+        "",
+        "| wall | diaphragm | median, search [m s-2] | median, 1 % scan [m s-2] | ratio | "
+        "dispersion, search | dispersion, scan |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for f in b["fits"]:
+        lines.append(f"| {f['wall']} | {f['diaphragm']} | {f['median_search']:.3f} | "
+                     f"{f['median_scan']:.3f} | {f['median_search'] / f['median_scan']:.3f} | "
+                     f"{f['dispersion_search']:.3f} | {f['dispersion_scan']:.3f} |")
+    return lines + [""]
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="check the machinery (small sizes)")
+    p.add_argument("--out", default="reports/performance",
+                   help="folder for fragility.json and fragility.md")
+    args = p.parse_args(argv)
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    data = run(args.quick)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    name = "fragility-quick" if args.quick else "fragility"
+    (out / f"{name}.json").write_text(json.dumps(data, indent=1, default=float) + "\n")
+    (out / f"{name}.md").write_text("\n".join(render(data)))
+    print(out / f"{name}.md")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

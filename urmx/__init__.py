@@ -24,8 +24,8 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("analysis", "catalog", "kernel", "model", "plot", "records", "reference",
-               "report", "simulation", "study", "variables")
+_SUBMODULES = ("analysis", "catalog", "fragility", "fragility_report", "kernel", "model", "plot",
+               "records", "reference", "report", "simulation", "study", "variables")
 
 
 def __getattr__(name):

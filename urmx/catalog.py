@@ -9,8 +9,12 @@ Data lives in the top-level ``catalog/`` folder, never in code:
 - ``studies/*.toml``: study grids (`load_study`).
 
 A study file may also define its own walls (``[walls.<id>]``) and diaphragms
-(``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. Every error names the
-file, the key and (where it can be found) the line.
+(``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. A diaphragm entry
+``"D1/both"`` (or ``"D1/top"``) gives the cells on it their own supports, so that one study
+holds single- and higher-storey walls. An ``[study.ida]`` table (im, rtol, step,
+max_intensity) makes the study an IDA study: one collapse capacity per cell
+(`urmx.fragility`). Every error names the file, the key and (where it can be found) the
+line.
 """
 
 from __future__ import annotations

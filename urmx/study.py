@@ -14,6 +14,10 @@ missing batches are computed. The archive is written to a temporary name and ren
 sidecar folder is removed after that. The archive's ``history`` carries the time the run was
 first started, so a resumed run writes the same archive as an uninterrupted one.
 
+IDA studies (a study file with ``[study.ida]``) run through the same machinery: a batch
+is a group of walls of one diaphragm and record, and each cell is one collapse capacity
+(`urmx.fragility.run_ida_batch`, assembled by `urmx.fragility.assemble_ida`).
+
 Schedulers: ``None`` (default) starts a local ``dask.distributed`` cluster of worker
 processes, one per core (the numba kernel holds the GIL, so processes beat threads);
 ``"threads"`` the same with threads; ``"serial"`` runs in this process; any other string is a

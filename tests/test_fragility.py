@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -619,3 +620,51 @@ im = "pga"
             .replace(str(ref), "X")
     xr.testing.assert_identical(a, b)
     assert int(a.analyses.min()) > 0 and a.collapse_intensity.notnull().all()
+
+
+# ---- the report ---------------------------------------------------------------------------------
+
+def stiff_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
+    """As `study_kernel`, with the threshold times (k_top / 815 kN/m)**0.1: D4 is 1.478
+    times as strong as D1 for every wall and record."""
+    thr = 40.0 / w.slenderness * (len(ag) / 150.0) * cor * (w.top_stiffness / 815e3) ** 0.1
+    ratio = min(1.0, scale * float(np.max(np.abs(ag))) / thr)
+    return {"status": "collapsed" if ratio >= 1.0 else "ok", "instability_ratio": ratio}
+
+
+def test_fragility_report_numbers_and_figures(fake_records, tmp_path):
+    from urmx.fragility_report import write_report
+
+    p = tmp_path / "rep.toml"
+    p.write_text("""
+[study]
+name = "rep-ida"
+walls = ["s08", "s16", "s24"]
+diaphragms = ["D1", "D4", "D1/both", "D4/both"]
+records = ["quake", "shake"]
+cor = [0.8]
+[study.ida]
+max_intensity = 100.0
+""")
+    ds = st.run_study(p, kernel=stiff_kernel, scheduler="serial", progress=False)
+    assert np.isfinite(ds.predominant_frequency).all()
+    path = write_report(ds, tmp_path / "rep")
+    text = path.read_text()
+    for name in ("ida_D1.png", "ida_D4-both.png", "fragility_curves.png",
+                 "median_vs_slenderness.png", "median_vs_frequency.png", "resonance.png",
+                 "stiffening.png"):
+        assert (tmp_path / "rep" / name).read_bytes()[:4] == b"\x89PNG"
+        assert f"]({name})" in text
+    assert "falls with h/t on 4 of 4 diaphragms (Spearman rho -1 to -1)" in text
+    # s08 / s24: thresholds 40/8 and 40/24 -> 3x, whatever the record
+    assert "the stockiest wall's median is 3 to 3 times the most slender's" in text
+    k = (40360e3 / 815e3) ** 0.1
+    assert f"The median changes by a factor {k:.3g} to {k:.3g}; it rises for 3 of 3 walls" \
+        in text
+    # the s16/D1 median in g: geometric mean of the two records' thresholds at COR 0.8
+    med = math.sqrt(threshold(16, "quake", 0.8) * threshold(16, "shake", 0.8)) / 9.81
+    row = re.search(r"\| s16 \| 16 \| ([0-9.]+) \(([0-9.]+)\)", text)
+    assert float(row.group(1)) == pytest.approx(med, abs=1.5e-3)
+    assert float(row.group(2)) == pytest.approx(math.log(200 / 150) / 2, abs=0.01)
+    with pytest.raises(ValueError, match="not an IDA archive"):
+        write_report(xr.Dataset({"x": ("a", [1.0])}), tmp_path / "bad")

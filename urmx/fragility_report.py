@@ -476,12 +476,14 @@ def _findings(d: xr.Dataset, rho, lo_w: str, hi_w: str, t: xr.Dataset, stf: dict
         b = _binned(t, g)
         near = next(m for lo, hi, n, m in b if lo <= 1.0 < hi)
         low = min(b, key=lambda x: x[3] if np.isfinite(x[3]) else np.inf)
+        near_text = (f"a capacity is a median {_fmt(math.exp(near), 3)} times the same wall "
+                     "and record's geometric mean over the flexible diaphragms"
+                     if np.isfinite(near) else "there are no cells")
         lines.append(
             f"- **Resonance, {GROUPS[g].split(' (')[0]} walls.** Where the record's "
-            f"predominant frequency is within 0.8-1.25 of the diaphragm's, a capacity is a "
-            f"median {_fmt(math.exp(near), 3)} times the same wall and record's geometric "
-            f"mean over the flexible diaphragms; the lowest binned median is "
-            f"{_fmt(math.exp(low[3]), 3)}, at frequency ratios {low[0]:g}-{low[1]:g}.")
+            f"predominant frequency is within 0.8-1.25 of the diaphragm's, {near_text}; the "
+            f"lowest binned median is {_fmt(math.exp(low[3]), 3)}, at frequency ratios "
+            f"{low[0]:g}-{low[1]:g}.")
     for g, v in stf.items():
         r = v["ratio"]
         up = [str(w) for w in r.wall.values if float(r.sel(wall=w)) > 1.0]

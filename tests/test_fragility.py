@@ -601,7 +601,7 @@ im = "pga"
     cmd = [sys.executable, "-m", "urmx.cli", "ida", str(study), "--scheduler", "serial",
            "--batch-size", "1", "--quiet", "--out"]
     ref = tmp_path / "ref.nc"
-    subprocess.run([*cmd, str(ref)], env=env, check=True, capture_output=True)
+    st.run_study(study, out=ref, scheduler="serial", progress=False, records_dir=RECORDS)
     out = tmp_path / "run.nc"
     proc = subprocess.Popen([*cmd, str(out)], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE)
@@ -615,9 +615,10 @@ im = "pga"
     assert 2 <= kept < 60
     subprocess.run([*cmd, str(out)], env=env, check=True, capture_output=True)
     a, b = xr.load_dataset(out), xr.load_dataset(ref)
+    assert a.attrs["history"].split(" ", 1)[1].startswith("urmx ") and "ida" in \
+        a.attrs["history"]
     for x in (a, b):
-        x.attrs["history"] = x.attrs["history"].split(" ", 1)[1].replace(str(out), "X") \
-            .replace(str(ref), "X")
+        x.attrs["history"] = ""  # the command line differs (a shell against a call)
     xr.testing.assert_identical(a, b)
     assert int(a.analyses.min()) > 0 and a.collapse_intensity.notnull().all()
 

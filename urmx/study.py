@@ -583,7 +583,9 @@ def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
             enc[name] = {}
         elif name in ds.coords:
             enc[name] = {"_FillValue": None}
-        elif np.issubdtype(var.dtype, np.integer):
+            if var.ndim > 1:  # a grid of values (the intensities of IDA curves)
+                enc[name].update(zlib=True, complevel=4)
+        elif np.issubdtype(var.dtype, np.integer) or var.dtype == bool:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
         else:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}

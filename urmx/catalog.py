@@ -408,7 +408,7 @@ class IdaSettings:
 
     im: str = "pga"
     rtol: float = 1e-3
-    step: float = 1.5
+    step: float = 1.05
     max_intensity: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:

@@ -150,6 +150,18 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
     return axes
 
 
+def _log_x(ax) -> None:
+    """A log x-axis with plain numbers as tick labels."""
+    from matplotlib.ticker import ScalarFormatter
+
+    ax.set_xscale("log")
+    fmt = ScalarFormatter()
+    fmt.set_scientific(False)
+    ax.xaxis.set_major_formatter(fmt)
+    ax.xaxis.set_minor_formatter(ScalarFormatter())
+    ax.tick_params(axis="x", which="minor", labelsize=7)
+
+
 def _colors(ds) -> dict[str, tuple]:
     from matplotlib import colormaps
 
@@ -183,9 +195,9 @@ def plot_median(ds: xr.Dataset, against: str = "slenderness", axes=None) -> list
                 ok = np.isfinite(fx)
                 ax.plot(fx[ok], med.sel(wall=w).values[ok], "o-", ms=3, color=cmap[str(w)],
                         label=str(w))
-            ax.set_xscale("log")
+            _log_x(ax)
             ax.set_xlabel("diaphragm frequency (Table IV SDOF) [Hz]")
-            ax.legend(fontsize="x-small", ncol=2, title="wall")
+            ax.legend(fontsize="x-small", ncol=3, title="wall", loc="best")
         ax.set_ylabel(f"median collapse {ds.attrs.get('intensity_measure', '')} [{unit}]")
         ax.set_title(GROUPS.get(g, g), fontsize=9)
         ax.grid(True, alpha=0.3)
@@ -249,7 +261,7 @@ def plot_resonance(t: xr.Dataset, axes=None) -> list:
         ax.plot(xs, [math.exp(m) for *_, m in b], "o-", color="C3", label="binned median")
         ax.axvline(1.0, color="k", lw=0.8, ls=":")
         ax.axhline(1.0, color="k", lw=0.8)
-        ax.set_xscale("log")
+        _log_x(ax)
         ax.set_xlabel("record predominant frequency / diaphragm frequency [1]")
         ax.set_ylabel("relative collapse intensity [1]")
         ax.set_title(GROUPS.get(g, g), fontsize=9)
@@ -283,7 +295,7 @@ def plot_stiffening(st: dict, ds: xr.Dataset, ax=None):
                 label=f"{GROUPS.get(g, g).split(' (')[0]}: {v['stiff']} / {v['soft']}")
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_xlabel("slenderness h/t [1]")
-    ax.set_ylabel("median collapse intensity, stiffened / as built [1]")
+    ax.set_ylabel("median ratio, stiffened / as built [1]")
     ax.legend(fontsize="x-small")
     ax.grid(True, alpha=0.3)
     return ax
@@ -344,7 +356,8 @@ def write_report(archive, out_dir: str | os.PathLike) -> Path:
         f"records x COR {', '.join(f'{c:g}' for c in ds.cor.values)} = {n_cells} collapse "
         f"capacities. Intensity measure: `{im}` ({ds.collapse_intensity.attrs.get('long_name')})"
         f", shown in {unit}. Search: hunt on a geometric grid of scale factors (ratio "
-        f"{ds.attrs.get('ida_step')}), then bisection to rtol {ds.attrs.get('ida_rtol')}; "
+        f"{ds.attrs.get('ida_step')}, striding over grid points far from collapse), then "
+        f"bisection to rtol {ds.attrs.get('ida_rtol')}; "
         f"capacities are the first collapse the search saw (`urmx.fragility`); cells that "
         f"survive {_fmt(ds.attrs.get('ida_max_intensity', math.nan) * f)} {unit} are censored "
         "there and enter the fits as censored observations.",

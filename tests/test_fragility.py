@@ -215,6 +215,10 @@ def test_rocking_period_from_the_pinned_mechanism_by_hand():
         # the plateau of both segments holds the most: Mi = 0.675 M0 each, over m a1 / 2
         assert F.static_acceleration(w) == pytest.approx(
             0.675 * (M0_2 + k * M0_1) / (0.5 * m * a1), rel=1e-9)
+        # and no rotation up to instability holds more (a dense scan of the curve)
+        _, coupling, restoring, th_max, _ = F._mechanism(w)
+        dense = max(restoring(t) for t in np.linspace(0, th_max, 2001)) / coupling
+        assert dense <= F.static_acceleration(w) * (1 + 1e-12)
     periods = [F.rocking_period(wall(s)) for s in (8, 12, 16, 20, 24)]
     assert np.all(np.diff(periods) > 0)  # slender walls rock more slowly
     # the supports do not enter, only the masses on the wall

@@ -105,8 +105,9 @@ START_FRACTION = 0.5  # default start: this fraction of the wall's static accele
 # ---- the wall's own mechanism -------------------------------------------------------------
 
 def _mechanism(wall: Wall):
-    """(inertia, ground coupling, resistance(theta1), instability theta1) of the wall with
-    both supports pinned: one coordinate theta1, theta2 = -(a1/a2) theta1, family 2."""
+    """(inertia, ground coupling, resistance(theta1), instability theta1, the pinned wall) of
+    the wall with both supports pinned: one coordinate theta1, theta2 = -(a1/a2) theta1,
+    family 2."""
     from .model import resistance, system
 
     pinned = wall.replace(bottom_stiffness=RIGID, top_stiffness=RIGID, bottom_damping=0.0,
@@ -122,7 +123,7 @@ def _mechanism(wall: Wall):
         return float(resistance(P, 2, theta1) + k * resistance(P, 1, k * theta1))
 
     theta_ins = min(pinned.segment(2).theta0, pinned.segment(1).theta0 / k)
-    return inertia, coupling, restoring, theta_ins
+    return inertia, coupling, restoring, theta_ins, pinned
 
 
 def rocking_period(wall: Wall) -> float:
@@ -142,17 +143,22 @@ def rocking_period(wall: Wall) -> float:
         mechanism's inertia and ``R`` its restoring moment (both segments' trilinear
         resistances, MODEL.md section 3). [s]
     """
-    inertia, _, restoring, theta_ins = _mechanism(wall)
+    inertia, _, restoring, theta_ins, _ = _mechanism(wall)
     theta_d = DESIGN_FRACTION * theta_ins
     return 2.0 * math.pi * math.sqrt(inertia * theta_d / restoring(theta_d))
 
 
 def static_acceleration(wall: Wall) -> float:
     """Ground acceleration that holds the pinned mechanism at its strongest point: the peak
-    restoring moment over the ground coupling ``m a1 / 2``. [m s-2]"""
-    _, coupling, restoring, theta_ins = _mechanism(wall)
-    theta = np.linspace(0.0, theta_ins, 401)
-    return max(restoring(t) for t in theta) / coupling
+    restoring moment over the ground coupling ``m a1 / 2``. [m s-2]
+
+    The restoring moment is piecewise linear in theta1, so its peak lies at a corner of
+    one of the two trilinear curves (or at the instability rotation)."""
+    _, coupling, restoring, theta_ins, pinned = _mechanism(wall)
+    k = pinned.a1 / pinned.a2
+    lower, upper = pinned.segment(2), pinned.segment(1)
+    corners = [lower.theta_a, lower.theta_b, upper.theta_a / k, upper.theta_b / k, theta_ins]
+    return max(restoring(t) for t in corners if 0.0 < t <= theta_ins) / coupling
 
 
 def diaphragm_period(wall: Wall) -> float:

@@ -24,6 +24,7 @@ import xarray as xr
 from scipy.stats import norm
 
 import urmx.records
+import urmx.variables
 from urmx import fragility as F
 from urmx import study as st
 from urmx.catalog import CatalogError, load_study
@@ -470,6 +471,10 @@ def test_ida_archive_schema_values_and_fits(fake_records, tiny, tmp_path):
                 continue
             assert med == pytest.approx(math.sqrt(q * sh), rel=1.5e-3)
             assert disp == pytest.approx(abs(math.log(q / sh)) / 2, abs=1.5e-3)
+    stamped = urmx.variables.stamp(ds.copy())  # the registry's templates filled, not raw
+    assert stamped.collapse_intensity.attrs == ds.collapse_intensity.attrs
+    bare = xr.Dataset({"intensity": ("x", [1.0])})
+    assert "units" not in urmx.variables.stamp(bare).intensity.attrs
     back = st.open_study(out)
     assert back.collapse_intensity.chunks is not None
     xr.testing.assert_identical(ds, back.load())

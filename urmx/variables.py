@@ -51,9 +51,21 @@ def attrs(name: str, **context: str) -> dict[str, str]:
 
 
 def stamp(ds):
-    """Set units/long_name/description on every registered variable of an xarray object."""
+    """Set units/long_name/description on every registered variable of an xarray object.
+
+    Entries with placeholders take them from the object's ``intensity_measure`` attribute
+    (IDA archives); without it they are left as they are."""
     reg = registry()
+    context = {}
+    im = getattr(ds, "attrs", {}).get("intensity_measure")
+    if im is not None:
+        from .fragility import IM_ATTRS
+
+        if im in IM_ATTRS:
+            context = {"im_units": IM_ATTRS[im][0], "im_name": IM_ATTRS[im][1]}
     for name in list(ds.variables):
         if name in reg:
-            ds[name].attrs.update(attrs(name))
+            if "{" in reg[name]["units"] + reg[name]["long_name"] and not context:
+                continue
+            ds[name].attrs.update(attrs(name, **context))
     return ds

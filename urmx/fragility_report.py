@@ -151,15 +151,13 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
 
 
 def _log_x(ax) -> None:
-    """A log x-axis with plain numbers as tick labels."""
-    from matplotlib.ticker import ScalarFormatter
+    """A log x-axis labelled at 1, 2 and 5 times the powers of ten, as plain numbers."""
+    from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
     ax.set_xscale("log")
-    fmt = ScalarFormatter()
-    fmt.set_scientific(False)
-    ax.xaxis.set_major_formatter(fmt)
-    ax.xaxis.set_minor_formatter(ScalarFormatter())
-    ax.tick_params(axis="x", which="minor", labelsize=7)
+    ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
 
 
 def _colors(ds) -> dict[str, tuple]:

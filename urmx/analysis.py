@@ -95,7 +95,7 @@ def nearest_wall(ds: xr.Dataset, height: float, rtol: float = 0.02) -> str:
     return str(ds["wall"].values[i])
 
 
-def _spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Spearman rank correlation along the last axis (numpy core); NaN pairs dropped."""
     x, y = np.broadcast_arrays(x, y)
     flat_x = x.reshape(-1, x.shape[-1])
@@ -134,7 +134,7 @@ def rank_correlation(da: xr.DataArray, coord: str, dim: str) -> xr.DataArray:
     if coord not in da.coords:
         raise MissingDataError(f"rank correlation needs the coordinate {coord!r}")
     x, y = xr.broadcast(da.astype(float).compute(), da[coord].astype(float).compute())
-    rho = xr.apply_ufunc(_spearman, x, y, input_core_dims=[[dim], [dim]])
+    rho = xr.apply_ufunc(spearman, x, y, input_core_dims=[[dim], [dim]])
     rho = rho.rename("rank_correlation").drop_vars(coord, errors="ignore")
     rho.attrs = {**registry_attrs("rank_correlation"), "long_name": f"Spearman rank "
                  f"correlation of {da.attrs.get('long_name', da.name)} with {coord}"}

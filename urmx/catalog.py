@@ -12,12 +12,17 @@ Data lives in the top-level ``catalog/`` folder, never in code:
   building to them).
 
 A study file may also define its own walls (``[walls.<id>]``) and diaphragms
-(``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. Every error names the
-file, the key and (where it can be found) the line.
+(``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. A diaphragm entry
+``"D1/both"`` (or ``"D1/top"``) gives the cells on it their own supports, so that one study
+holds single- and higher-storey walls. An ``[study.ida]`` table (im, rtol, step,
+max_intensity) makes the study an IDA study: one collapse capacity per cell
+(`urmx.fragility`). Every error names the file, the key and (where it can be found) the
+line.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
@@ -351,6 +356,8 @@ class Study:
     scale_factor: dict[str, float] = field(default_factory=dict)
     pairs: dict[str, list[str]] | None = None
     histories: list[History] = field(default_factory=list)
+    own_supports: dict[str, str] = field(default_factory=dict)  # diaphragm label -> supports
+    ida: IdaSettings | None = None
     _src: Any = field(default=None, repr=False)
 
     @property
@@ -369,13 +376,20 @@ class Study:
     def paired(self, wall: str, record: str) -> bool:
         return self.pairs is None or record in self.pairs.get(wall, ())
 
+    def supports_of(self, diaphragm: Diaphragm | str) -> str:
+        """Supports of the cells on a diaphragm: its own (a ``"D1/both"`` entry) or the
+        study's."""
+        label = diaphragm if isinstance(diaphragm, str) else diaphragm.id
+        return self.own_supports.get(label, self.supports)
+
     def wall(self, spec: WallSpec, diaphragm: Diaphragm, damping: float | None = None) -> Wall:
         """The `Wall` of one cell: a catalog wall on a diaphragm as the study's supports say.
 
         ``damping`` (the study's ``damping`` dimension) replaces the damping ratio of every
         flexible support.
         """
-        if self.supports == SPECIMEN:
+        supports = self.supports_of(diaphragm)
+        if supports == SPECIMEN:
             w = spec.wall
             if damping is not None:
                 w = w.replace(bottom_damping=0.0 if w.bottom_rigid else damping,
@@ -385,7 +399,7 @@ class Study:
         zeta = diaphragm.damping if damping is None else damping
         zeta = 0.0 if diaphragm.rigid else zeta
         top = dict(top_stiffness=diaphragm.stiffness, top_mass=md, top_damping=zeta)
-        if self.supports == "top":  # single storey: the ground is the rigid bottom support
+        if supports == "top":  # single storey: the ground is the rigid bottom support
             bottom = dict(bottom_stiffness=RIGID, bottom_mass=0.0, bottom_damping=0.0)
         else:  # "both": a higher storey between two diaphragms alike
             bottom = dict(bottom_stiffness=diaphragm.stiffness, bottom_mass=md,
@@ -396,6 +410,66 @@ class Study:
         if self._src is None:
             return CatalogError(f"study {self.name}: {key}: {message}")
         return self._src.error(key, message, *needles)
+
+
+@dataclass(frozen=True)
+class IdaSettings:
+    """The ``[study.ida]`` table: one collapse capacity per cell (`urmx.fragility`).
+
+    Parameters
+    ----------
+    im : str
+        Intensity measure (`urmx.fragility.IMS`).
+    rtol : float
+        Relative width of the final bracket. [1]
+    step : float
+        Ratio of the hunt's geometric grid of scale factors. [1]
+    max_intensity : float
+        Highest intensity analysed (censoring). [units of the measure]
+    """
+
+    im: str = "pga"
+    rtol: float = 1e-3
+    step: float = 1.05
+    max_intensity: float = math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def _ida(src: _Source, table: Any, study: Study) -> IdaSettings:
+    """Validate ``[study.ida]`` and the grid it runs on."""
+    from .fragility import IMS, MAX_INTENSITY, STEP
+
+    if not isinstance(table, dict):
+        raise src.error("study.ida", "must be a table (im, rtol, step, max_intensity)", "ida")
+    known = ("im", "rtol", "step", "max_intensity")
+    for k in table:
+        if k not in known:
+            raise src.error(f"study.ida.{k}", f"unknown key (known: {', '.join(known)})", "ida",
+                            k)
+    im = table.get("im", "pga")
+    if im not in IMS:
+        raise src.error("study.ida.im", f"{im!r} is not an intensity measure (known: "
+                        f"{', '.join(IMS)})", "ida", "im")
+    values = {}
+    for k, default, low in (("rtol", 1e-3, 0.0), ("step", STEP, 1.0),
+                            ("max_intensity", MAX_INTENSITY[im], 0.0)):
+        v = table.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or v <= low:
+            raise src.error(f"study.ida.{k}", f"{v!r} must be a number above {low:g}", "ida", k)
+        values[k] = float(v)
+    if values["rtol"] >= 1.0:
+        raise src.error("study.ida.rtol", f"{values['rtol']!r} must be below 1", "ida", "rtol")
+    for k in ("scale", "impact", "damping"):
+        if k in study.extra:
+            raise src.error(f"study.{k}", "an IDA study scales each record itself and runs one "
+                            f"capacity per (wall, diaphragm, record, cor): {k} cannot be a "
+                            "dimension here", k)
+    if study.histories:
+        raise src.error("study.history", "an IDA study keeps no time histories", "history")
+    return IdaSettings(im=im, **values)
 
 
 def _values(src: _Source, key: str, value: Any, kind: type) -> list:
@@ -464,7 +538,7 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
         raise src.error("study", "missing [study] table")
     known = {"name", "title", "description", "walls", "diaphragms", "supports", "records", "cor",
              "scale", "impact", "damping", "tail", "scale_factor", "pairs", "history",
-             "catalog"}
+             "catalog", "ida"}
     for k in s:
         if k not in known:
             raise src.error(f"study.{k}", f"unknown key (known: {', '.join(sorted(known))})", k)
@@ -483,6 +557,7 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
         if k not in s:
             raise src.error(f"study.{k}", "missing", "study")
     supports = s.get("supports", "top")
+    own_supports: dict[str, str] = {}
     if supports not in SUPPORTS:
         raise src.error("study.supports", f"{supports!r} is not one of {SUPPORTS}", "supports")
     if s["walls"] == "parametric":
@@ -504,11 +579,19 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
                                 description="the test wall's own supports (Table II)")]
     else:
         diaphragms = []
-        for d in _values(src, "study.diaphragms", s["diaphragms"], str):
+        for label in _values(src, "study.diaphragms", s["diaphragms"], str):
+            d, _, own = label.partition("/")
             if d not in cat.diaphragms:
                 raise src.error("study.diaphragms", f"unknown diaphragm id {d!r} (known: "
-                                f"{', '.join(cat.diaphragms)})", "diaphragms", d)
-            diaphragms.append(cat.diaphragms[d])
+                                f"{', '.join(cat.diaphragms)})", "diaphragms", label)
+            if own and own not in ("top", "both"):
+                raise src.error("study.diaphragms", f"{label!r}: the supports after '/' must "
+                                'be "top" or "both"', "diaphragms", label)
+            if own:
+                own_supports[label] = own
+                diaphragms.append(dataclasses.replace(cat.diaphragms[d], id=label))
+            else:
+                diaphragms.append(cat.diaphragms[d])
     records = _values(src, "study.records", s["records"], str)
     cor = _values(src, "study.cor", s["cor"], float)
     for c in cor:
@@ -561,8 +644,10 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
                   path=src.path, text=src.text, catalog=cat, walls=walls,
                   diaphragms=diaphragms, supports=supports, records=records, cor=cor,
                   extra=extra, impact=impact, tail=float(tail), scale_factor=scale_factor,
-                  pairs=pairs, _src=src)
+                  pairs=pairs, own_supports=own_supports, _src=src)
     study.histories = _histories(src, study, s.get("history", []))
+    if "ida" in s:
+        study.ida = _ida(src, s["ida"], study)
     # every cell's Wall must be valid: build them now, before any computation
     for spec in walls:
         for d in diaphragms:

@@ -19,6 +19,7 @@ import xarray as xr
 
 from . import analysis as A
 from . import plot as P
+from .markdown import number as _fmt
 from .markdown import table
 from .variables import attrs as registry_attrs
 
@@ -74,13 +75,6 @@ def classify(archives: Iterable) -> tuple[dict[str, xr.Dataset], list[str]]:
             notes.append(f"{name}: a second {label} archive; the later one is used")
         studies[kind] = ds
     return studies, notes
-
-
-def _fmt(value, digits: int = 3) -> str:
-    value = float(value)
-    if not np.isfinite(value):
-        return "inf" if value > 0 else ("-" if np.isnan(value) else "-inf")
-    return f"{value:.{digits}g}"
 
 
 def _save(axes, out_dir: Path, name: str) -> str:

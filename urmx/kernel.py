@@ -1106,14 +1106,6 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
 
 
 @njit(cache=True, _nrt=False, error_model="numpy")
-def _peaks_event(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
-                 MG, r, v, a0, beta, H, n):
-    """:func:`_peaks_over` up to an event (off the hot path: one compiled copy)."""
-    return _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC,
-                       MR, MG, r, v, a0, beta, H, n)
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
     """One row of the histories: tilts, displacements, accelerations, pattern and the
     support-reduced coordinates r = N y and their rates."""
@@ -1313,20 +1305,30 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 if s_root < s_ev or k_ev < 0:
                     s_ev = s_root
                     k_ev = k
-            if k_ev < 0:
-                # no event: peaks over the sub-step, then advance
-                _point_fast(MK, MC, MR, MG, TR, rb, vb, alpha + beta * tb, beta, val_b, der_b,
-                            sacc, sjerk, n)
-                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, 1.0, m_taylor, D,
-                                       cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
-                if m_taylor:
-                    n_series += 1
-                if ist[I_FAM] == 1:
-                    fam1_time += H
-                tau = tb
-                for i in range(NP):
-                    r[i] = rb[i]
-                    v[i] = vb[i]
+            s_end = 1.0
+            t_end = tb
+            if k_ev >= 0:
+                # an event at tau + s_ev*H: the state there, summed from the series
+                if m_taylor == 0:
+                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
+                _sum_state(D, m_taylor, s_ev, H, rb, vb)
+                s_end = s_ev
+                t_end = tau + s_ev * H
+            _point_fast(MK, MC, MR, MG, TR, rb, vb, alpha + beta * t_end, beta, val_b, der_b,
+                        sacc, sjerk, n)
+            if s_end > 0.0:
+                # peaks over [tau, t_end], the one-sided values before an event included
+                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor,
+                                       D, cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
+            if m_taylor:
+                n_series += 1
+            if ist[I_FAM] == 1:
+                fam1_time += s_end * H
+            tau = t_end
+            for i in range(NP):
+                r[i] = rb[i]
+                v[i] = vb[i]
+            if k_ev < 0:  # no event: on to the next sub-step
                 for t in range(N_TRACK):
                     val_a[t] = val_b[t]
                     der_a[t] = der_b[t]
@@ -1336,25 +1338,6 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 if tb >= dt:
                     break
                 continue
-            # ---- an event at tau + s_ev*H ----
-            n_series += 1
-            if m_taylor == 0:
-                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-            He = s_ev * H
-            _sum_state(D, m_taylor, s_ev, H, rb, vb)
-            te_loc = tau + He
-            _point(MK, MC, MR, MG, TR, rb, vb, alpha + beta * te_loc, beta, val_b, der_b, sacc,
-                   sjerk)
-            if He > 0.0:
-                # peaks on [tau, te], the one-sided values before the event included
-                _peaks_event(TR, peaks, val_a, der_a, val_b, der_b, s_ev, m_taylor, D, cf, MK,
-                             MC, MR, MG, r, v, a0, beta, H, n)
-            if ist[I_FAM] == 1:
-                fam1_time += He
-            tau = te_loc
-            for i in range(NP):
-                r[i] = rb[i]
-                v[i] = vb[i]
             # handle this event and every other one due at the same instant
             while k_ev >= 0:
                 if n_events < evlog.shape[0]:
@@ -1393,11 +1376,11 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
                 MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], \
                     vecs[mid, 1], prop[mid], pvec[mid]
-                _point(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a, sacc,
-                       sjerk)
+                _point_fast(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a,
+                            sacc, sjerk, n)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
-                _events_now(RT, KP, r, v, e_a, ed_a)
+                _events_at(RT, KP, r, v, e_a, ed_a, n)
                 if rel:
                     _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, alpha + beta * tau, beta, e_a,
                                 ed_a)

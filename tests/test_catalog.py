@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from urmx.catalog import calibrate, calibration_report, load_catalog, load_study
+from urmx.catalog import load_catalog, load_study
+from urmx.paper import calibrate, calibration_report, load_paper
 
 
 @pytest.fixture(scope="module")
@@ -40,10 +41,22 @@ def test_table_ii_walls_and_table_iii(cat):
 
 
 def test_diaphragms_of_table_iv(cat):
-    k = {d: cat.diaphragms[d].stiffness for d in ("D1", "D2", "D3", "D4", "D5")}
-    assert k == {"D1": 815e3, "D2": 2406e3, "D3": 21310e3, "D4": 40360e3, "D5": "rigid"}
-    assert cat.diaphragms["D5"].table_stiffness == 1e9
-    assert math.isinf(cat.diaphragms["D5"].stiffness_value)
+    k = {d: cat.diaphragms[d].stiffness for d in ("D1", "D2", "D3", "D4", "D5", "D5-pinned")}
+    # D5 is the paper's 1e6 kN/m spring; the pinned top is offered under its own id
+    assert k == {"D1": 815e3, "D2": 2406e3, "D3": 21310e3, "D4": 40360e3, "D5": 1e9,
+                 "D5-pinned": "rigid"}
+    assert math.isinf(cat.diaphragms["D5-pinned"].stiffness_value)
+    # every analysed stiffness is Table IV's (kN/m there)
+    for d, row in load_paper()["table4"].items():
+        assert cat.diaphragms[d].stiffness_value == pytest.approx(1e3 * row["stiffness"])
+
+
+def test_d5_spring_frequency_is_table_iv_range(cat):
+    # Table IV footnote SDOF with the building's diaphragm mass: 30-40 Hz for D5
+    single = load_study("paper-single-storey")
+    f = [single.wall(cat.walls[w], cat.diaphragms["D5"]).diaphragm_frequency("top")
+         for w in cat.parametric_walls]
+    assert 29.0 < min(f) < max(f) < 41.0
 
 
 def test_calibration_matches_tables_iv_and_vi(cat, tmp_path):
@@ -67,7 +80,7 @@ def test_calibration_matches_tables_iv_and_vi(cat, tmp_path):
 
 
 @pytest.mark.parametrize("name, size, dims", [
-    ("paper-single-storey", 135, (9, 5, 3, 1)),
+    ("paper-single-storey", 162, (9, 6, 3, 1)),
     ("paper-multi-storey", 108, (9, 4, 3, 1)),
     ("verification", 63, (3, 1, 3, 21)),
 ])
@@ -81,8 +94,11 @@ def test_study_walls_and_histories():
     single = load_study("paper-single-storey")
     w = single.wall(single.catalog.walls["s18"], single.catalog.diaphragms["D1"])
     assert w.bottom_rigid and w.top_stiffness == 815e3 and w.top_damping == 0.12
-    assert [h.label for h in single.histories] == ["s18/D1/christchurch/cor0.8",
-                                                   "s18/D5/christchurch/cor0.8"]
+    labels = [h.label for h in single.histories]
+    assert "s18/D1/christchurch/cor0.8" in labels and "s18/D5/christchurch/cor0.8" in labels
+    assert "s18/D5-pinned/christchurch/cor0.8" in labels and len(labels) == 9
+    w5 = single.wall(single.catalog.walls["s18"], single.catalog.diaphragms["D5"])
+    assert w5.top_stiffness == 1e9 and w5.top_mass > 0 and not w5.top_rigid
     multi = load_study("paper-multi-storey")
     w = multi.wall(multi.catalog.walls["s18"], multi.catalog.diaphragms["D2"])
     assert w.bottom_stiffness == w.top_stiffness == 2406e3

@@ -7,6 +7,8 @@ from matplotlib.figure import Figure
 from urmx import analysis as A
 from urmx import plot as P
 
+RANGES = {"elcentro": (0.2, 7.0), "nahanni": (7.0, 9.0), "christchurch": (0.2, 3.0)}
+
 
 def test_label_from_attrs(single):
     assert P.label(single["peak_top_acceleration"]) == (
@@ -14,10 +16,12 @@ def test_label_from_attrs(single):
 
 
 def test_peak_profiles_two_panels_one_line_per_diaphragm(single):
-    axes = P.plot_peak_profiles(A.peak_profiles(single, "acceleration"))
+    axes = P.plot_peak_profiles(A.peak_profiles(single, "acceleration", "christchurch", cor=0.8))
     assert len(axes) == 2 and axes[0].figure is axes[1].figure
     for ax in axes:
-        assert [ln.get_label() for ln in ax.get_lines()] == ["D1", "D3", "D5"]
+        # a diaphragm's legend entry carries its frequency (rigid: "pinned")
+        assert [ln.get_label() for ln in ax.get_lines()] == ["D1 (1 Hz)", "D3 (5 Hz)",
+                                                             "D5 (pinned)"]
         assert ax.get_xlabel() == "slenderness h/t [1]"
     assert axes[0].get_ylabel() == "peak absolute acceleration at wall top [m s-2]"
     np.testing.assert_allclose(axes[0].get_lines()[0].get_xdata(), [8, 12, 18, 24])
@@ -40,7 +44,7 @@ def test_stability_one_panel_per_record(single):
 
 
 def test_histories_panels_and_lines(single):
-    axes = P.plot_histories(A.displacement_histories(single))
+    axes = P.plot_histories(A.displacement_histories(single, 4.14, ("D1", "D5"), "christchurch"))
     assert len(axes) == 2  # top and crack displacement, pattern not drawn
     assert [ln.get_label() for ln in axes[0].get_lines()] == ["diaphragm D1", "diaphragm D5"]
     assert axes[1].get_ylabel() == "displacement at crack height [m]"
@@ -49,11 +53,12 @@ def test_histories_panels_and_lines(single):
 
 def test_given_axes_too_few_is_an_error(single):
     with pytest.raises(ValueError, match="needs 2 axes"):
-        P.plot_peak_profiles(A.peak_profiles(single), axes=[Figure().subplots()])
+        P.plot_peak_profiles(A.peak_profiles(single, "acceleration", "christchurch"),
+                             axes=[Figure().subplots()])
 
 
 def test_resonance_bands_and_markers(multi):
-    res = A.resonance(multi)
+    res = A.resonance(multi, ranges=RANGES)
     ax = P.plot_resonance(res)
     assert len(ax.collections) == 6  # a band and a marker set per record
     offsets = ax.collections[1].get_offsets()
@@ -64,7 +69,7 @@ def test_resonance_bands_and_markers(multi):
 
 
 def test_resonance_places_rigid_diaphragm_at_right_edge(single):
-    ax = P.plot_resonance(A.resonance(single))
+    ax = P.plot_resonance(A.resonance(single, ranges=RANGES))
     x = ax.collections[1].get_offsets()[:, 0]
     assert np.isfinite(x).all() and x[-1] > x[:-1].max()
 

@@ -1,9 +1,12 @@
 """write_report and `urmx report` on small synthetic archives."""
 
+import numpy as np
+
 from urmx.cli import main
 from urmx.report import study_kind, write_report
 
-from .fixtures.studies import multi_storey, single_storey, verification
+from .fixtures import paper_studies as F
+from .fixtures.studies import multi_storey, single_storey
 
 FIGURES = ["fig6_peak_acceleration.png", "fig7_peak_displacement.png", "fig8_histories.png",
            "fig9_stability_single.png", "fig10_stability_multi.png", "resonance_multi.png",
@@ -11,31 +14,75 @@ FIGURES = ["fig6_peak_acceleration.png", "fig7_peak_displacement.png", "fig8_his
 
 
 def test_full_report(tmp_path):
-    path = write_report([single_storey(), multi_storey(), verification()], tmp_path)
+    path = write_report([F.single(), F.multi(), F.verification()], tmp_path)
     text = path.read_text()
     assert path == tmp_path / "REPORT.md"
     for name in FIGURES:
         assert (tmp_path / name).stat().st_size > 1000, name
         assert f"]({name})" in text
-    # Table VI: the paper's numbers beside the computed ones
-    assert "| D5 | paper | 33 | 47 | 230 | 230 | 0.2 | 0.14 | 0.2 | 0.015 | 2 |" in text
-    assert "| D1 | paper | 22 | 16 | 230 | 62 | 0.07 | 0.35 | 0.35 | > 0.5 | 3 |" in text
-    assert "| D1 | urmx | 22 | 16 | 153 | 76.7 | 0.07 | 0.35 | 0.35 | 0.6 | 3 |" in text
-    # west: collapse times [nan, 7.0, 5.4, 4.0, 3.0] over cor 0.70..0.90, target 5.3 s;
-    # at the paper's 0.83 the nearest grid COR 0.85 gives 25 mm and 4.0 s
-    assert "| west | nahanni | 0.83 | collapse_time = 5.3 | 0.8 | 0.019 | 25 | 4 |" in text
-    assert "Not available" not in text
-    assert "D5 is a rigid top support here" in text
+    # Table III: 45 rows beside the paper's; Table IV with the fitted ranges
+    t3 = text.split("## Table III")[1].split("## Table IV")[0]
+    assert t3.count("| wall12 |") + t3.count("| west |") + t3.count("| c9 |") == 45
+    assert "| D5 | 1e+09 | 1e+09 | 30-40 |" in text and "fitted" in text
+    # Table VI: the paper's numbers beside the computed ones, the like-for-like column (2)
+    assert "| D5 | paper | 33 | 47 | 230 | 230 | 0.2 | 0.14 | 0.2 | - | 0.015 | 2 |" in text
+    assert "| D1 | paper | 22 | 16 | 230 | 62 | 0.07 | 0.35 | 0.35 | 22 | > 0.5 | 3 |" in text
+    assert "| D1 | urmx | " in text and "| 22 | 0.6 | 3 |" in text
+    assert "| D5-pinned | urmx |" in text
+    # Figs. 6/7 tables in g and mm
+    assert "peak absolute acceleration at wall top [g]" in text
+    assert "peak displacement at wall top [mm]" in text
+    # the verification says per wall, in words, whether the paper's COR is reproduced
+    ver = text.split("## Verification")[1].split("## Findings")[0]
+    for wall in ("wall12", "west", "c9"):
+        assert f"**{wall}**" in ver
+    assert "best COR 0.82" in ver and "not reproduced" in ver
     findings = text.split("## Findings")[1]
-    assert findings.count("| yes |") == 11
-    assert "median \\|rho\\| = 0.40" in findings
+    assert findings.count("| yes |") == 30 and "| **no** |" not in findings
+    assert "Not available" not in text.split("## Resonance")[0]
+
+
+def test_figures_in_paper_order_and_units(tmp_path):
+    from urmx import analysis as A
+    from urmx import plot as P
+    from urmx.paper import load_paper
+    from urmx.report import _paper_order, _record_titles
+
+    ds = F.single()
+    assert _paper_order(ds, load_paper()) == ["nahanni", "christchurch", "elcentro"]
+    titles = _record_titles(ds, load_paper())
+    assert titles["nahanni"].startswith("nahanni x 0.94") and "g)" in titles["nahanni"]
+    axes = P.plot_stability(A.governing_instability(ds).sel(record=_paper_order(ds, load_paper())),
+                            titles=titles)
+    assert axes[0].get_title().startswith("(a) nahanni")
+    labels = [t.get_text() for t in axes[0].get_legend().get_texts()]
+    assert "D5 (33 Hz)" in labels and "D5-pinned (pinned)" in labels
+    hist = P.in_display_units(A.displacement_histories(ds, 4.14, ("D1",), "christchurch"))
+    assert hist["crack_displacement"].attrs["units"] == "mm"
+    assert float(abs(hist["crack_displacement"]).max()) == 50.0
+
+
+def test_cor_figure_draws_round_off_flat_and_skips_cells_not_run():
+    import xarray as xr
+
+    from urmx import plot as P
+
+    cor = [0.7, 0.75, 0.8]
+    da = xr.DataArray([[0.11 + 1e-15, 0.11, 0.11 - 1e-15], [np.nan] * 3], dims=("record", "cor"),
+                      coords={"record": ["nahanni", "bigbear"], "cor": cor},
+                      attrs={"units": "m", "long_name": "x"})
+    ax = P.plot_cor_match(da)
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["nahanni"]
+    lo, hi = ax.get_ylim()
+    assert hi - lo > 1e-3  # a 1e-15 wiggle is not blown up into spikes
 
 
 def test_missing_archives_are_reported_not_fatal(tmp_path):
     text = write_report([single_storey(histories=False)], tmp_path).read_text()
     assert "no paper-multi-storey archive was given" in text
     assert "no verification archive was given" in text
-    assert "_Not available: time histories needs history_wall" in text
+    assert "_Not available: time histories needs history_wall" in text or \
+        "_Not available:" in text
     assert "_Not available: no paper-multi-storey archive was given._" in text
     assert "| n/a |" in text and (tmp_path / "fig6_peak_acceleration.png").exists()
 

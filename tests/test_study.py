@@ -76,7 +76,7 @@ STUDY = """\
 name = "small"
 title = "a small test grid"
 walls = ["s08", "s18"]
-diaphragms = ["D1", "D5"]
+diaphragms = ["D1", "D5-pinned"]
 supports = "top"
 records = ["quake", "shake"]
 cor = [0.7, 0.8]
@@ -125,7 +125,7 @@ def test_dataset_schema_and_values(fake_records, small):
     assert float(cell.peak_top_displacement) == pytest.approx(1.49, rel=1e-12)
     assert float(cell.instability_ratio) == pytest.approx(6.0 * 0.8 / 18.0, rel=1e-12)
     # s08 under "shake" at 0.8: ratio 4.8/8 = 0.6 (ok); every cell ran
-    assert int(ds.status.sel(wall="s08", record="shake", cor=0.8, diaphragm="D5")) == 0
+    assert int(ds.status.sel(wall="s08", record="shake", cor=0.8, diaphragm="D5-pinned")) == 0
     assert ds.base_impacts.dtype == np.int32 and int(ds.base_impacts.min()) == 7
     # D1's frequency (median wall s18): sqrt(815e3 / (m_d + m/2)) / 2 pi with the catalog's
     # building: m = 22871.08 kg, m_d = 12869.50 kg
@@ -248,7 +248,7 @@ def test_bad_study_fails_with_file_line_and_key(make_study, body, needle, line):
 
 
 def test_negative_stiffness_fails(make_study):
-    path = make_study(STUDY.replace('["D1", "D5"]', '["D1", "soft"]') + """
+    path = make_study(STUDY.replace('["D1", "D5-pinned"]', '["D1", "soft"]') + """
 [diaphragms.soft]
 stiffness = -5.0e5
 """, "neg.toml")

@@ -38,10 +38,12 @@ def registry_problems(ds: xr.Dataset | xr.DataArray, scope: str | None = None) -
     no units (only flag variables, with ``flag_values``, may have none)."""
     if isinstance(ds, xr.DataArray):
         ds = ds.to_dataset()
+    im = ds.attrs.get("intensity_measure")  # IDA archives: units follow the measure
+    context = variables.intensity_context(im) if im else {}
     problems = []
     for name, var in ds.variables.items():
         try:
-            want = variables.attrs(str(name), scope)
+            want = variables.attrs(str(name), scope, **context)
         except KeyError:
             problems.append(f"{name}: not in the registry")
             continue
@@ -78,6 +80,42 @@ def test_study_archive(records_dir, make_study, tmp_path):
                 "status", "theta_lower", "instability_ratio"} <= set(ds.variables)
         assert registry_problems(ds) == []
         assert ds["status"].attrs["flag_meanings"] == "ok collapsed event_limit not_run"
+
+
+IDA_STUDY = """\
+[study]
+name = "registry-walk-ida"
+walls = ["s16"]
+diaphragms = ["D1", "D1/both"]
+records = ["p695-01-mul009"]
+cor = [0.8]
+
+[study.ida]
+im = "sa_wall"
+"""
+
+
+def test_ida_archive(records_dir, make_study, tmp_path):
+    from .fixtures.records import record_file
+
+    record_file("library/catalog.tsv")
+    out = tmp_path / "ida.nc"
+    run_study(make_study(IDA_STUDY, "ida.toml"), out=out, scheduler="serial", progress=False,
+              records_dir=records_dir)
+    with open_study(out) as ds:
+        assert {"collapse_intensity", "censored", "intensity", "intensity_step", "supports",
+                "median_collapse_intensity", "rocking_period",
+                "predominant_frequency"} <= set(ds.variables)
+        assert registry_problems(ds) == []
+        assert ds["collapse_intensity"].attrs["units"] == "m s-2"
+        assert "rocking period" in ds["collapse_intensity"].attrs["long_name"]
+        # without the archive's measure the templated entries are not stamped at all
+        bare = variables.stamp(xr.Dataset({"intensity": ("x", [1.0])}))
+        assert "units" not in bare["intensity"].attrs
+    with pytest.raises(KeyError, match="needs 'im_units'"):
+        variables.attrs("collapse_intensity")
+    with pytest.raises(KeyError, match="unknown intensity measure 'sa'"):
+        variables.intensity_context("sa")
 
 
 def test_simulate_archive(records_dir, make_wall, tmp_path):

@@ -24,8 +24,9 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("analysis", "catalog", "guard", "kernel", "markdown", "model", "netcdf", "plot",
-               "records", "reference", "report", "simulation", "study", "variables")
+_SUBMODULES = ("analysis", "catalog", "fragility", "fragility_report", "guard", "kernel",
+               "markdown", "model", "netcdf", "paper", "plot", "records", "reference",
+               "report", "simulation", "study", "variables")
 
 
 def __getattr__(name):

@@ -1,4 +1,8 @@
-"""Reductions of a study Dataset behind the paper's Figs. 5-10 and Table VI.
+"""General reductions of a study Dataset (peaks against slenderness, instability ratios,
+histories, segment stability, best-matching COR, frequency against a record's range).
+
+The paper's own numbers, its defaults (record, wall, COR) and its findings are not here:
+they live in :mod:`urmx.paper` and ``catalog/paper.toml``; every choice is an argument.
 
 Every function takes a study Dataset (the schema of ``urmx.study``: dims ``wall``,
 ``diaphragm``, ``record``, ``cor`` and optional extra dims) and dimension *names*, and
@@ -7,9 +11,10 @@ A piece the Dataset lacks raises :class:`MissingDataError` naming what is missin
 
 Selection rules shared by all reductions (:func:`select`):
 
-- ids are matched case-insensitively, then as a unique substring (``"christchurch"``
-  finds ``"christchurch_rehs"``);
-- ``cor`` is taken nearest to the requested value (the paper's 0.8 by default);
+- ids are matched case-insensitively, then as a unique substring (``"kobe"`` finds
+  ``"kobe_nis000"``);
+- ``cor`` is taken nearest to the requested value (its first value when none is given, noted
+  in ``attrs["selection"]``);
 - any other extra dimension (``scale``, ``impact``, ...) that the caller does not keep
   is taken at its first value, and the choice is written to ``attrs["selection"]``.
 """
@@ -26,35 +31,7 @@ from scipy.stats import rankdata
 from .variables import attrs as registry_attrs
 from .variables import stamp
 
-PAPER_COR = 0.8  # "a COR of 0.8 was assumed consistently in all the analyses" (Section 6)
-FIG8_HEIGHT = 4.14  # m, the wall of Fig. 8 and Table VI (slenderness 18)
 GRID_DIMS = ("wall", "diaphragm", "record", "cor")
-
-# Table V, significant frequency range of each record [Hz]
-SIGNIFICANT_FREQUENCY = {
-    "elcentro": (0.2, 7.0),
-    "nahanni": (7.0, 9.0),
-    "christchurch": (0.2, 3.0),
-}
-
-# Table VI of the paper: displacements in mm, ratios [1]
-PAPER_TABLE_VI = {
-    "D5": {"peak_lower_drift": 33, "peak_upper_drift": 47,
-           "instability_displacement_upper": 230, "instability_displacement_lower": 230,
-           "instability_ratio_upper": 0.20, "instability_ratio_lower": 0.14,
-           "instability_ratio": 0.20},
-    "D1": {"peak_lower_drift": 22, "peak_upper_drift": 16,
-           "instability_displacement_upper": 230, "instability_displacement_lower": 62,
-           "instability_ratio_upper": 0.07, "instability_ratio_lower": 0.35,
-           "instability_ratio": 0.35},
-}
-# Section 6.3.1: time share in patterns 11/12 of the Fig. 8 wall
-PAPER_UNFAVOURABLE = {"D1": "> 0.5", "D5": "0.015"}
-
-# Section 5.2: the COR that best matched each verification test
-PAPER_BEST_COR = {"wall12": 0.78, "west": 0.83, "c9": 0.83}
-# Section 5.2: the only response value the text states (West wall instability at 5.3 s)
-PAPER_TARGETS = {"west": ("collapse_time", 5.3)}
 
 class MissingDataError(ValueError):
     """The study Dataset lacks a variable, coordinate or cell a reduction needs."""
@@ -83,15 +60,20 @@ def match_id(ds: xr.Dataset, dim: str, wanted: str) -> str:
     raise MissingDataError(f"no {dim} {wanted!r} in the study (it has {', '.join(values)})")
 
 
-def select(ds, keep: Sequence[str] = (), cor: float = PAPER_COR, **ids: str):
-    """One slice of a study: ``ids`` by name (e.g. ``record="christchurch"``), ``cor``
-    nearest, extra dimensions not in ``keep`` at their first value."""
+def select(ds, keep: Sequence[str] = (), cor: float | None = None, **ids: str):
+    """One slice of a study: ``ids`` by name (e.g. ``record="kobe"``), ``cor`` nearest (the
+    first when None), extra dimensions not in ``keep`` at their first value."""
     out = ds
     for dim, wanted in ids.items():
         out = out.sel({dim: match_id(out, dim, wanted)})
-    if "cor" in out.dims and "cor" not in keep:
-        out = out.sel(cor=cor, method="nearest")
     notes = []
+    if "cor" in out.dims and "cor" not in keep:
+        if cor is None:
+            if out.sizes["cor"] > 1:
+                notes.append(f"cor={float(out['cor'].values[0]):g}")
+            out = out.isel(cor=0)
+        else:
+            out = out.sel(cor=cor, method="nearest")
     for dim in list(out.dims):
         if dim in keep or dim in GRID_DIMS or dim in ("history", "time"):
             continue
@@ -103,7 +85,7 @@ def select(ds, keep: Sequence[str] = (), cor: float = PAPER_COR, **ids: str):
     return out
 
 
-def nearest_wall(ds: xr.Dataset, height: float = FIG8_HEIGHT, rtol: float = 0.02) -> str:
+def nearest_wall(ds: xr.Dataset, height: float, rtol: float = 0.02) -> str:
     """Id of the wall whose ``height(wall)`` is nearest ``height`` (within ``rtol``)."""
     _require(ds, ["height"], "choosing a wall by height")
     h = np.asarray(ds["height"].values, dtype=float)
@@ -113,7 +95,7 @@ def nearest_wall(ds: xr.Dataset, height: float = FIG8_HEIGHT, rtol: float = 0.02
     return str(ds["wall"].values[i])
 
 
-def _spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+def spearman(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Spearman rank correlation along the last axis (numpy core); NaN pairs dropped."""
     x, y = np.broadcast_arrays(x, y)
     flat_x = x.reshape(-1, x.shape[-1])
@@ -152,7 +134,7 @@ def rank_correlation(da: xr.DataArray, coord: str, dim: str) -> xr.DataArray:
     if coord not in da.coords:
         raise MissingDataError(f"rank correlation needs the coordinate {coord!r}")
     x, y = xr.broadcast(da.astype(float).compute(), da[coord].astype(float).compute())
-    rho = xr.apply_ufunc(_spearman, x, y, input_core_dims=[[dim], [dim]])
+    rho = xr.apply_ufunc(spearman, x, y, input_core_dims=[[dim], [dim]])
     rho = rho.rename("rank_correlation").drop_vars(coord, errors="ignore")
     rho.attrs = {**registry_attrs("rank_correlation"), "long_name": f"Spearman rank "
                  f"correlation of {da.attrs.get('long_name', da.name)} with {coord}"}
@@ -165,10 +147,10 @@ def stiffness_trend(da: xr.DataArray, dim: str = "diaphragm") -> xr.DataArray:
     return rank_correlation(da, "stiffness", dim)
 
 
-def peak_profiles(ds: xr.Dataset, quantity: str = "acceleration",
-                  record: str = "christchurch", cor: float = PAPER_COR) -> xr.Dataset:
-    """Absolute maxima at the wall top and at crack height against slenderness, one
-    column per diaphragm (Fig. 6 for ``quantity="acceleration"``, Fig. 7 for
+def peak_profiles(ds: xr.Dataset, quantity: str, record: str,
+                  cor: float | None = None) -> xr.Dataset:
+    """Absolute maxima at the wall top and at crack height against slenderness under one
+    record, one column per diaphragm (``quantity`` ``"acceleration"`` or
     ``"displacement"``).
 
     Returns
@@ -186,9 +168,9 @@ def peak_profiles(ds: xr.Dataset, quantity: str = "acceleration",
     return out
 
 
-def governing_instability(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.DataArray:
+def governing_instability(ds: xr.Dataset, cor: float | None = None) -> xr.DataArray:
     """The governing instability ratio over (record, diaphragm, wall), walls sorted by
-    slenderness (Fig. 9 for the single-storey study, Fig. 10 for the higher storeys)."""
+    slenderness."""
     _require(ds, ["instability_ratio", "slenderness"], "the stability figure")
     out = select(ds["instability_ratio"], keep=("wall", "diaphragm", "record"), cor=cor)
     out = out.sortby("slenderness")
@@ -196,12 +178,12 @@ def governing_instability(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.DataArra
     return out
 
 
-def displacement_histories(ds: xr.Dataset, height: float = FIG8_HEIGHT,
-                           diaphragms: Sequence[str] = ("D1", "D5"),
-                           record: str = "christchurch", cor: float = PAPER_COR,
+def displacement_histories(ds: xr.Dataset, height: float, diaphragms: Sequence[str],
+                           record: str, cor: float | None = None,
                            variables: Sequence[str] = ("top_displacement",
                                                        "crack_displacement")) -> xr.Dataset:
-    """Time histories of one wall with several diaphragms (Fig. 8).
+    """Time histories of the wall ``height`` high with several diaphragms under one record
+    (``cor`` nearest; the first stored when None).
 
     Returns
     -------
@@ -217,13 +199,11 @@ def verification_histories(ds: xr.Dataset, wall: str, cor: float | None = None,
                            variables: Sequence[str] = ("top_displacement",
                                                        "crack_displacement",
                                                        "base_displacement")) -> xr.Dataset:
-    """Histories of one verification wall under every record stored (Fig. 5), at the
-    paper's best COR for that wall (Section 5.2) unless ``cor`` is given.
+    """Histories of one wall under every record stored for it, ``cor`` nearest (the first
+    stored when None).
 
     Returns a Dataset over (record, time)."""
     wall = match_id(ds, "wall", wall)
-    if cor is None:
-        cor = PAPER_BEST_COR.get(wall.lower(), PAPER_COR)
     _require(ds, ["history_record"], "verification histories")
     records = sorted({str(r) for r, w in zip(ds["history_record"].values,
                                              ds["history_wall"].values, strict=True)
@@ -242,6 +222,8 @@ def _histories(ds, along, items, variables, cor, **fixed) -> xr.Dataset:
     labels = {dim: np.asarray(ds[key].values).astype(str) for dim, key in keys.items()
               if dim != "cor"}
     hcor = np.asarray(ds["history_cor"].values, dtype=float)
+    if cor is None:
+        cor = float(hcor[0])
     index, found = [], []
     for item in items:
         item = match_id(ds, along, item)
@@ -298,10 +280,10 @@ def instability_displacements(ds: xr.Dataset) -> xr.Dataset:
                                        attrs=registry_attrs(k)) for k, v in out.items()})
 
 
-def stability_table(ds: xr.Dataset, height: float = FIG8_HEIGHT,
-                    diaphragms: Sequence[str] = ("D5", "D1"),
-                    record: str = "christchurch", cor: float = PAPER_COR) -> xr.Dataset:
-    """Table VI: stability of the segments of one wall with several diaphragms.
+def stability_table(ds: xr.Dataset, height: float, diaphragms: Sequence[str], record: str,
+                    cor: float | None = None) -> xr.Dataset:
+    """Stability of the segments of one wall (``height`` high) with several diaphragms under
+    one record (the columns of the paper's Table VI).
 
     Columns: (2) ``peak_lower_drift`` (crack height relative to the base), (3)
     ``peak_upper_drift`` (differential top - crack), (4)-(5) ``instability_displacement_
@@ -344,14 +326,14 @@ def stability_table(ds: xr.Dataset, height: float = FIG8_HEIGHT,
     for name in out.data_vars:
         out[name].attrs = registry_attrs(name)
     out.attrs = {"wall": wall, "height": float(ds["height"].sel(wall=wall)),
-                 "record": match_id(ds, "record", record), "cor": cor,
+                 "record": match_id(ds, "record", record),
+                 "cor": float(cell["cor"]) if "cor" in cell.coords else float("nan"),
                  "instability_displacement_source": source}
     return out
 
 
 def best_cor(da: xr.DataArray, target, dim: str = "cor") -> xr.Dataset:
-    """The value of ``dim`` whose response is nearest ``target`` (Section 5.2's
-    calibration of the COR).
+    """The value of ``dim`` whose response is nearest ``target`` (a COR calibration).
 
     Parameters
     ----------
@@ -382,23 +364,33 @@ def best_cor(da: xr.DataArray, target, dim: str = "cor") -> xr.Dataset:
     return out
 
 
-def frequency_ranges(ds: xr.Dataset) -> xr.Dataset:
-    """Significant frequency range of every record: coords ``frequency_low(record)`` and
-    ``frequency_high(record)`` [Hz] when the Dataset has them, else the paper's Table V
-    by record id."""
+def frequency_ranges(ds: xr.Dataset, ranges: dict | None = None) -> xr.Dataset:
+    """Significant frequency range of every record of ``ds``: coords
+    ``frequency_low(record)``/``frequency_high(record)`` when the Dataset has them, else
+    ``ranges`` (``{record id: (low, high)}`` [Hz], ids matched as by :func:`match_id`).
+
+    Returns
+    -------
+    Dataset over record with ``frequency_low`` and ``frequency_high`` [Hz]; attr
+    ``frequency_range_source``.
+    """
     if "frequency_low" in ds.variables and "frequency_high" in ds.variables:
         lo, hi = ds["frequency_low"].values, ds["frequency_high"].values
         source = "record coords"
     else:
+        if not ranges:
+            raise MissingDataError("no significant frequency ranges (coords frequency_low/"
+                                   "frequency_high, or ranges by record id)")
         lo, hi = [], []
+        keys = {str(k).lower(): v for k, v in ranges.items()}
         for r in ds["record"].values:
-            key = next((k for k in SIGNIFICANT_FREQUENCY if k in str(r).lower()), None)
-            if key is None:
-                raise MissingDataError(f"no significant frequency range for record {r!r} "
-                                       "(coords frequency_low/frequency_high or Table V)")
-            lo.append(SIGNIFICANT_FREQUENCY[key][0])
-            hi.append(SIGNIFICANT_FREQUENCY[key][1])
-        source = "Table V"
+            key = str(r).lower()
+            hits = [k for k in keys if k == key] or [k for k in keys if k in key]
+            if len(hits) != 1:
+                raise MissingDataError(f"no significant frequency range for record {r!r}")
+            lo.append(float(keys[hits[0]][0]))
+            hi.append(float(keys[hits[0]][1]))
+        source = "given ranges"
     coords = {"record": ds["record"].values}
     out = xr.Dataset({"frequency_low": ("record", np.asarray(lo, float)),
                       "frequency_high": ("record", np.asarray(hi, float))}, coords)
@@ -408,9 +400,10 @@ def frequency_ranges(ds: xr.Dataset) -> xr.Dataset:
     return out
 
 
-def resonance(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.Dataset:
-    """Diaphragm frequency against each record's significant frequency range, with the
-    change in stability (Section 6.3.2).
+def resonance(ds: xr.Dataset, cor: float | None = None,
+              ranges: dict | None = None) -> xr.Dataset:
+    """Diaphragm frequency against each record's significant frequency range (see
+    :func:`frequency_ranges` for ``ranges``), with the change in stability.
 
     Returns
     -------
@@ -421,7 +414,7 @@ def resonance(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.Dataset:
     stiffest diaphragm's) [1] and ``collapses`` (count over walls).
     """
     _require(ds, ["frequency", "stiffness", "instability_ratio"], "the resonance view")
-    ranges = frequency_ranges(ds)
+    ranges = frequency_ranges(ds, ranges)
     freq = ds["frequency"]
     if "wall" in freq.dims:
         freq = freq.mean("wall")
@@ -457,216 +450,8 @@ def resonance(ds: xr.Dataset, cor: float = PAPER_COR) -> xr.Dataset:
     return out
 
 
-# ---- the paper's findings, computed -----------------------------------------------------
-
-STAND_INS = ("the Christchurch record is a stand-in (Darfield 2010 at Pages Road, not the 2011 "
-             "REHS record) and the Nahanni one the 1985 mainshock, not the aftershock "
-             "(reports/records.md)")
-
-
-def _finding(finding, paper, measure, compute, note=""):
-    """Run one check; ``compute`` returns (computed text, agree or None)."""
-    try:
-        computed, agree = compute()
-    except MissingDataError as exc:
-        computed, agree = f"not available: {exc}", None
-    return {"finding": finding, "paper": paper, "measure": measure, "computed": computed,
-            "agree": agree, "note": note if agree is False else ""}
-
-
-def _majority(rho: xr.DataArray, sign: int) -> tuple[str, bool]:
-    vals = rho.values.ravel()
-    vals = vals[np.isfinite(vals)]
-    if vals.size == 0:
-        raise MissingDataError("no finite rank correlations (too few walls or diaphragms)")
-    k = int((np.sign(vals) == sign).sum())
-    med = float(np.median(vals))
-    text = f"median rho = {med:+.2f}; rho {'>' if sign > 0 else '<'} 0 for {k} of {vals.size}"
-    return text, bool(np.sign(med) == sign and k > vals.size / 2)
-
-
-def findings(single: xr.Dataset | None = None, multi: xr.Dataset | None = None,
-             cor: float = PAPER_COR) -> list[dict]:
-    """The findings of the paper's Sections 6-7, each next to what the archives give.
-
-    Each entry: ``finding``, ``paper`` (what the paper states), ``measure`` (the stated
-    criterion), ``computed`` (text), ``agree`` (True/False, None when not computable)
-    and ``note`` (a known reason when they disagree).
-    """
-    def need(ds, kind):
-        if ds is None:
-            raise MissingDataError(f"no {kind} study archive was given")
-        return ds
-
-    def trend(quantity, where, sign):
-        def run():
-            pk = peak_profiles(need(single, "single-storey"), quantity, cor=cor)
-            rho = stiffness_trend(pk[f"peak_{where}_{quantity}"])
-            return _majority(rho, sign)
-        return run
-
-    def share(diaphragm, test):
-        def run():
-            tab = stability_table(need(single, "single-storey"), diaphragms=(diaphragm,),
-                                  cor=cor)
-            value = float(tab["unfavourable_fraction"].isel(diaphragm=0))
-            return f"{value:.3f} ({tab.attrs['wall']}, {tab.attrs['record']})", test(value)
-        return run
-
-    def table_vi():
-        tab = stability_table(need(single, "single-storey"), cor=cor)
-        r = tab["instability_ratio"]
-        d5, d1 = (float(r.sel(diaphragm=match_id(single, "diaphragm", d))) for d in ("D5", "D1"))
-        return f"D1 {d1:.2f}, D5 {d5:.2f}", d1 > d5
-
-    def slenderness(ds_kind, which, test, describe, records=None):
-        def run():
-            ds, kind = ds_kind()
-            ratio = governing_instability(need(ds, kind), cor=cor)
-            if records is not None:
-                ratio = ratio.sel(record=[match_id(ds, "record", r) for r in records])
-            if which is not None:
-                ids = [d for d in ratio["diaphragm"].values if which(str(d), ds)]
-                if not ids:
-                    raise MissingDataError("no such diaphragms in the study")
-                ratio = ratio.sel(diaphragm=ids)
-            rho = rank_correlation(ratio, "slenderness", "wall")
-            vals = rho.values.ravel()
-            vals = vals[np.isfinite(vals)]
-            if vals.size == 0:
-                raise MissingDataError("no finite rank correlations")
-            cells = ", ".join(f"{r}/{d} {float(v):+.2f}"
-                              for (r, d), v in _pairs(rho))
-            return f"{describe(vals)} ({cells})", test(vals)
-        return run
-
-    def flexible(d, ds):
-        return d.upper() in ("D1", "D2")
-
-    def stiff(d, ds):
-        return d.upper() in ("D3", "D4", "D5")
-
-    def trend_flex():
-        ratio = governing_instability(need(single, "single-storey"), cor=cor)
-        rho = stiffness_trend(ratio)  # over (record, wall)
-        text, agree = _majority(rho, -1)
-        return text + " (walls x records)", agree
-
-    def resonant():
-        res = resonance(need(multi, "higher-storey"), cor=cor)
-        parts, verdicts = [], []
-        for r in res["record"].values:
-            sub = res.sel(record=r)
-            dist = sub["range_distance"].values
-            if np.allclose(dist, dist[0]):
-                parts.append(f"{r}: all diaphragms equally near, not decidable")
-                continue
-            worst = str(sub["mean_instability_ratio"].idxmax("diaphragm").values)
-            ok = bool(sub["range_distance"].sel(diaphragm=worst) <= dist.min() + 1e-12)
-            verdicts.append(ok)
-            parts.append(f"{r}: worst {worst} ({float(sub['frequency'].sel(diaphragm=worst)):.2g}"
-                         f" Hz), nearest range {'yes' if ok else 'no'}")
-        if not verdicts:
-            raise MissingDataError("no record separates the diaphragms by frequency")
-        return "; ".join(parts), all(verdicts)
-
-    def median_abs(vals):
-        return f"median |rho| = {float(np.median(np.abs(vals))):.2f}"
-
-    def median_pos(vals):
-        return f"median rho = {float(np.median(vals)):+.2f}"
-
-    return [
-        _finding("Top acceleration rises with diaphragm stiffness (Fig. 6a)",
-                 "A_max,abs at the wall top generally increased with diaphragm stiffness",
-                 "Spearman rho of peak_top_acceleration with stiffness over diaphragms, per "
-                 "wall, Christchurch; agree if the median rho > 0 and rho > 0 for most walls",
-                 trend("acceleration", "top", +1),
-                 note="D5 is a rigid constraint here (MODEL.md section 6): the top moves with "
-                      "the ground, so its absolute acceleration is the ground's, below that "
-                      "of the spring diaphragms D2-D4; the paper's D5 was a 1e9 N/m spring "
-                      "(30-40 Hz) whose top still responds. Over D1-D4 alone the top "
-                      "acceleration does rise for most walls (Fig. 6 table)"),
-        _finding("Crack-height acceleration rises slightly with stiffness (Fig. 6b)",
-                 "also slightly increased, up to ~50 % from D1 to D4",
-                 "as above for peak_crack_acceleration",
-                 trend("acceleration", "crack", +1)),
-        _finding("Top displacement falls with diaphragm stiffness (Fig. 7a)",
-                 "Delta_max,abs at the wall top generally reduced with stiffness",
-                 "Spearman rho of peak_top_displacement with stiffness, per wall; agree if "
-                 "the median rho < 0 and rho < 0 for most walls",
-                 trend("displacement", "top", -1)),
-        _finding("D1: more than half the record in patterns 11/12 (Section 6.3.1)",
-                 "> 50 % for the 4140 mm wall, D1, Christchurch",
-                 "unfavourable_fraction of that cell > 0.5",
-                 share("D1", lambda v: v > 0.5),
-                 note=STAND_INS + "; the share also depends on the diaphragm mass, which the "
-                      "paper does not state (catalog calibration, reports/calibration.md)"),
-        _finding("D5: about 1.5 % of the record in patterns 11/12 (Section 6.3.1)",
-                 "1.5 % for the 4140 mm wall, D5, Christchurch",
-                 "unfavourable_fraction of that cell < 0.05",
-                 share("D5", lambda v: v < 0.05),
-                 note="with D5 modelled as a rigid constraint and a rigid base both joints "
-                      "close together and the family stays 2 (MODEL.md section 6), so the "
-                      "share is 0; the paper's 1.5 % came from a 1e9 N/m spring"),
-        _finding("The 4140 mm wall is less stable with D1 than with D5 (Table VI)",
-                 "governing ratio 0.35 (D1) vs 0.20 (D5)",
-                 "instability_ratio of D1 > that of D5",
-                 table_vi),
-        _finding("Most walls destabilise with diaphragm flexibility (Fig. 9)",
-                 "for most configurations the instability ratio increases with flexibility",
-                 "Spearman rho of instability_ratio with stiffness over diaphragms, per "
-                 "(wall, record); agree if the median rho < 0 and rho < 0 for most",
-                 trend_flex),
-        _finding("Stability does not track slenderness for D1/D2 (Figs. 9b, 9c)",
-                 "chaotic; the ratio does not correlate with slenderness",
-                 "Spearman rho of instability_ratio with slenderness over walls, per "
-                 "(record, D1/D2) for Christchurch and El Centro (the paper's Figs. 9b, 9c); "
-                 "agree if the median |rho| < 0.5",
-                 slenderness(lambda: (single, "single-storey"), flexible,
-                             lambda v: float(np.median(np.abs(v))) < 0.5, median_abs,
-                             records=("christchurch", "elcentro")),
-                 note="not known; " + STAND_INS),
-        _finding("Stability rises with slenderness for D3 and stiffer (Section 6.3.1)",
-                 "the ratio generally increases consistently with slenderness",
-                 "Spearman rho as above per (record, D3-D5); agree if the median rho > 0.5",
-                 slenderness(lambda: (single, "single-storey"), stiff,
-                             lambda v: float(np.median(v)) > 0.5, median_pos)),
-        _finding("Higher-storey stability has no obvious relation to slenderness (Fig. 10)",
-                 "no obvious relationship with slenderness",
-                 "Spearman rho per (record, diaphragm), higher-storey; agree if the median "
-                 "|rho| < 0.5",
-                 slenderness(lambda: (multi, "higher-storey"), None,
-                             lambda v: float(np.median(np.abs(v))) < 0.5, median_abs),
-                 note="not known; " + STAND_INS),
-        _finding("Two flexible diaphragms: worst under records whose dominant frequency is "
-                 "near the diaphragm's (Section 6.3.2)",
-                 "Nahanni (7-9 Hz) hurts stiffer, Christchurch (0.2-3 Hz) more flexible "
-                 "diaphragms; El Centro (broad) shows no clear relation",
-                 "per record (higher-storey), the diaphragm with the largest mean "
-                 "instability ratio over walls has the frequency nearest (log scale) the "
-                 "record's significant range; records where all diaphragms are equally "
-                 "near are not decidable; agree if true for every decidable record",
-                 resonant,
-                 note="the Nahanni substitute (the mainshock) carries its energy over "
-                      "1.3-15 Hz, not the aftershock's 7-9 Hz, and the Christchurch stand-in "
-                      "over 0.4-9 Hz (measured, reports/records.md), so the records do not "
-                      "separate the diaphragms by frequency as the paper's did"),
-    ]
-
-
-def _pairs(rho: xr.DataArray):
-    """((record, diaphragm), value) for a correlation over (record, diaphragm)."""
-    rho = rho.transpose("record", "diaphragm")
-    for r in rho["record"].values:
-        for d in rho["diaphragm"].values:
-            v = float(rho.sel(record=r, diaphragm=d))
-            if math.isfinite(v):
-                yield (str(r), str(d)), v
-
-
 def cor_matches(ds: xr.Dataset, targets: dict | None = None) -> xr.Dataset:
-    """The COR that best matches a target response for each verification wall.
+    """The COR that best matches a target response for each wall of a verification study.
 
     Parameters
     ----------
@@ -674,38 +459,35 @@ def cor_matches(ds: xr.Dataset, targets: dict | None = None) -> xr.Dataset:
         A verification study (dims wall, record, cor; a diaphragm dim of size 1 is
         dropped).
     targets : dict, optional
-        ``{wall_id: (variable, value)}``, e.g. ``{"c9": ("peak_top_displacement",
-        0.045)}``. By default: every data variable or coord ``measured_<variable>(wall)``
-        the Dataset carries (the measured peak of a test), then the one response value the
-        paper's text states (West wall instability at 5.3 s, ``collapse_time``).
+        ``{wall_id: (variable, value)}``, e.g. ``{"w1": ("peak_top_displacement", 0.045)}``
+        (ids matched as by :func:`match_id`). Every data variable or coord
+        ``measured_<variable>(wall)`` the Dataset carries (the measured peak of a test) is a
+        target too, for the walls ``targets`` leaves out.
 
     Returns
     -------
     Dataset over (wall, record) with ``best_cor`` and ``misfit``, coords
-    ``paper_best_cor(wall)`` (Section 5.2: 0.78, 0.83, 0.83), ``target_variable(wall)``
-    and ``target_value(wall)``; walls without a target have NaN.
+    ``target_variable(wall)`` and ``target_value(wall)``; walls without a target have NaN.
     """
-    if targets is None:
-        targets = {}
-        for name in ds.variables:
-            if str(name).startswith("measured_") and ds[name].dims == ("wall",):
-                var = str(name)[len("measured_"):]
-                for w in ds["wall"].values:
-                    value = float(ds[name].sel(wall=w))
-                    if math.isfinite(value):
-                        targets.setdefault(str(w), (var, value))
-        for key, (var, value) in PAPER_TARGETS.items():
-            try:
-                targets.setdefault(match_id(ds, "wall", key), (var, value))
-            except MissingDataError:
-                pass
+    given = {}
+    for key, target in (targets or {}).items():
+        try:
+            given[match_id(ds, "wall", key)] = target
+        except MissingDataError:
+            pass
+    targets = given
+    for name in ds.variables:
+        if str(name).startswith("measured_") and ds[name].dims == ("wall",):
+            var = str(name)[len("measured_"):]
+            for w in ds["wall"].values:
+                value = float(ds[name].sel(wall=w))
+                if math.isfinite(value):
+                    targets.setdefault(str(w), (var, value))
     walls = [str(w) for w in ds["wall"].values]
     best = np.full((len(walls), ds.sizes.get("record", 1)), np.nan)
     miss = np.full_like(best, np.nan)
-    tvar, tval, paper = [], [], []
+    tvar, tval = [], []
     for i, w in enumerate(walls):
-        key = next((k for k in PAPER_BEST_COR if k in w.lower()), None)
-        paper.append(PAPER_BEST_COR[key] if key else np.nan)
         var, value = targets.get(w, ("", np.nan))
         tvar.append(var)
         tval.append(value)
@@ -719,12 +501,42 @@ def cor_matches(ds: xr.Dataset, targets: dict | None = None) -> xr.Dataset:
         best[i] = np.broadcast_to(match["best_cor"].values, best[i].shape)
         miss[i] = np.broadcast_to(match["misfit"].values, miss[i].shape)
     coords = {"wall": walls, "record": ds["record"].values,
-              "paper_best_cor": ("wall", np.asarray(paper, float),
-                                 registry_attrs("paper_best_cor")),
               "target_variable": ("wall", np.asarray(tvar, dtype=str),
                                   registry_attrs("target_variable")),
               "target_value": ("wall", np.asarray(tval, float),
                                registry_attrs("target_value"))}
-    out = xr.Dataset({"best_cor": (("wall", "record"), best, registry_attrs("best_cor")),
-                      "misfit": (("wall", "record"), miss, registry_attrs("misfit"))}, coords)
-    return out
+    return xr.Dataset({"best_cor": (("wall", "record"), best, registry_attrs("best_cor")),
+                       "misfit": (("wall", "record"), miss, registry_attrs("misfit"))}, coords)
+
+
+def peak_in_patterns(hist: xr.Dataset, variable: str, patterns: Sequence[int],
+                     dim: str = "time") -> xr.DataArray:
+    """Largest ``|variable|`` over the instants of a history spent in ``patterns``.
+
+    Parameters
+    ----------
+    hist : Dataset
+        Histories with ``variable`` and ``pattern`` along ``dim`` (e.g. from
+        :func:`displacement_histories`).
+    variable : str
+        A history variable, or ``"lower_drift"``: ``crack_displacement -
+        base_displacement`` (the lower segment's drift a1*theta1). [m]
+    patterns : sequence of int
+        Rocking patterns (e.g. family 1 is 11 and 12).
+
+    Returns
+    -------
+    DataArray over the other dims; NaN where the history never is in ``patterns``. The peak
+    is taken on the history's grid (continuous-time peaks of the kernel can be about 1 %
+    larger).
+    """
+    names = ["crack_displacement", "base_displacement"] if variable == "lower_drift" \
+        else [variable]
+    _require(hist, [*names, "pattern"], f"the peak of {variable} in patterns")
+    values = hist[names[0]] - hist[names[1]] if variable == "lower_drift" else hist[variable]
+    inside = hist["pattern"].isin(list(patterns))
+    out = abs(values).where(inside).max(dim)
+    out.attrs = {**registry_attrs("peak_in_patterns"),
+                 "comment": f"peak |{variable}| while in patterns "
+                            f"{', '.join(str(p) for p in patterns)}"}
+    return out.rename("peak_in_patterns")

@@ -10,7 +10,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("simulate", "records", "study", "report", "bench")
+COMMANDS = ("simulate", "records", "study", "report", "bench", "fragility")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,8 +1,11 @@
-"""Markdown tables for the report writers (paper report, records, calibration, benchmarks)."""
+"""Markdown tables and numbers for the report writers (paper report, fragility report, records,
+calibration, benchmarks)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+
+import numpy as np
 
 
 def row(cells: Sequence) -> str:
@@ -26,3 +29,12 @@ def table(header: Sequence, rows: Iterable[Sequence]) -> list[str]:
         No blank line after the table; the caller separates blocks.
     """
     return [row(header), "|" + "---|" * len(header), *(row(r) for r in rows)]
+
+
+def number(value, digits: int = 3) -> str:
+    """A number for a table cell: `digits` significant digits, ``-`` for NaN, ``inf`` and
+    ``-inf`` as such."""
+    value = float(value)
+    if not np.isfinite(value):
+        return "inf" if value > 0 else ("-" if np.isnan(value) else "-inf")
+    return f"{value:.{digits}g}"

@@ -13,14 +13,18 @@ import xarray as xr
 
 def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     """netCDF4 encoding per variable: compressed outputs (NaN the fill value of floats, none
-    for integers), no fill value on coordinates, strings as they are."""
+    for integers and booleans: a NaN fill cast to int8 would make True the fill value),
+    no fill value on coordinates (multi-dimensional ones, such as the intensities of IDA
+    curves, compressed), strings as they are."""
     enc: dict[str, dict[str, Any]] = {}
     for name, var in ds.variables.items():
         if var.dtype == object:
             enc[name] = {}
         elif name in ds.coords:
             enc[name] = {"_FillValue": None}
-        elif np.issubdtype(var.dtype, np.integer):
+            if var.ndim > 1:  # a grid of values (the intensities of IDA curves)
+                enc[name].update(zlib=True, complevel=4)
+        elif np.issubdtype(var.dtype, np.integer) or var.dtype == bool:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
         else:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}

@@ -17,6 +17,35 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 PANEL = (5.0, 3.6)  # inches per panel
+G = 9.81  # m s-2 per g, the value the paper uses
+DISPLAY_UNITS = {"m": ("mm", 1e3), "m s-2": ("g", 1.0 / G)}  # SI -> what engineers compare
+
+
+def in_display_units(obj):
+    """A copy of a DataArray or Dataset with lengths in mm and accelerations in g (attrs
+    ``units`` changed accordingly); other variables unchanged. Archives stay SI."""
+    if isinstance(obj, xr.Dataset):
+        out = obj.copy()
+        for name in out.data_vars:
+            out[name] = in_display_units(out[name])
+        return out
+    units = obj.attrs.get("units")
+    if units not in DISPLAY_UNITS:
+        return obj
+    new, factor = DISPLAY_UNITS[units]
+    out = obj * factor
+    out.attrs = {**obj.attrs, "units": new}
+    out.name = obj.name
+    return out
+
+
+def moving(ds: xr.Dataset, variables: Sequence[str], rtol: float = 1e-6) -> list[str]:
+    """The variables of ``ds`` that move: peak |value| above ``rtol`` times the largest
+    peak among ``variables`` (a support fixed by a constraint stays exactly zero)."""
+    peaks = {v: float(np.nanmax(np.abs(ds[v].values))) if ds[v].size else 0.0
+             for v in variables if v in ds}
+    top = max(peaks.values(), default=0.0)
+    return [v for v, p in peaks.items() if top > 0 and p > rtol * top]
 
 
 def label(da) -> str:
@@ -38,15 +67,25 @@ def panels(axes, n: int, ncols: int | None = None) -> list[Axes]:
     return list(np.ravel(fig.subplots(nrows, ncols, squeeze=False)))[:n]
 
 
+def _hue_label(da: xr.DataArray, hue: str, value) -> str:
+    """``D3 (4.8 Hz)`` when the hue has a ``frequency`` coordinate, else the value."""
+    if hue == "diaphragm" and "frequency" in da.coords and "diaphragm" in da["frequency"].dims:
+        f = float(da["frequency"].sel(diaphragm=value))
+        return f"{value} ({f:.2g} Hz)" if np.isfinite(f) else f"{value} (pinned)"
+    return str(value)
+
+
 def plot_vs_slenderness(da: xr.DataArray, hue: str = "diaphragm", ax: Axes | None = None,
                         title: str | None = None) -> Axes:
     """One line per ``hue`` value of ``da`` (over ``wall`` and ``hue``) against
-    ``slenderness(wall)`` (one panel of Figs. 6, 7, 9, 10)."""
+    ``slenderness(wall)`` (one panel of Figs. 6, 7, 9, 10); a diaphragm's legend entry
+    carries its frequency when ``da`` has the ``frequency`` coordinate."""
     ax = ax if ax is not None else panels(None, 1)[0]
     da = da.sortby("slenderness")
     x = da["slenderness"].values
     for value in da[hue].values:
-        ax.plot(x, da.sel({hue: value}).values, marker="o", ms=3, label=str(value))
+        ax.plot(x, da.sel({hue: value}).values, marker="o", ms=3,
+                label=_hue_label(da, hue, value))
     ax.set_xlabel("slenderness h/t [1]")
     ax.set_ylabel(label(da))
     ax.legend(title=hue, fontsize="small")
@@ -67,14 +106,17 @@ def plot_peak_profiles(ds: xr.Dataset, axes: Sequence[Axes] | None = None) -> li
     return axes
 
 
-def plot_stability(da: xr.DataArray, axes: Sequence[Axes] | None = None) -> list[Axes]:
-    """Figs. 9 and 10: one panel per record, governing instability ratio against
-    slenderness, one line per diaphragm; ``da`` from
-    :func:`urmx.analysis.governing_instability`."""
+def plot_stability(da: xr.DataArray, axes: Sequence[Axes] | None = None,
+                   titles: dict | None = None) -> list[Axes]:
+    """Figs. 9 and 10: one panel per record in the order of ``da``'s record dimension,
+    governing instability ratio against slenderness, one line per diaphragm; ``da`` from
+    :func:`urmx.analysis.governing_instability`; ``titles`` by record id (default the id)."""
     records = [str(r) for r in da["record"].values]
     axes = panels(axes, len(records))
+    titles = titles or {}
     for letter, record, ax in zip("abcdefgh", records, axes, strict=False):
-        plot_vs_slenderness(da.sel(record=record), ax=ax, title=f"({letter}) {record}")
+        plot_vs_slenderness(da.sel(record=record), ax=ax,
+                            title=f"({letter}) {titles.get(record, record)}")
         ax.axhline(1.0, color="k", lw=0.8, ls="--")
     return axes
 
@@ -84,9 +126,10 @@ def plot_histories(ds: xr.Dataset, hue: str = "diaphragm",
                    axes: Sequence[Axes] | None = None) -> list[Axes]:
     """Figs. 5 and 8: one panel per variable, one line per ``hue`` value, against time;
     ``ds`` from :func:`urmx.analysis.displacement_histories` (hue ``diaphragm``) or
-    :func:`urmx.analysis.verification_histories` (hue ``record``)."""
+    :func:`urmx.analysis.verification_histories` (hue ``record``); by default the variables
+    that move (:func:`moving`)."""
     if variables is None:
-        variables = [v for v in ds.data_vars if v != "pattern"]
+        variables = moving(ds, [v for v in ds.data_vars if v != "pattern"])
     axes = panels(axes, len(variables), ncols=1)
     for letter, name, ax in zip("abcdefgh", variables, axes, strict=False):
         da = ds[name]
@@ -125,6 +168,9 @@ def plot_resonance(res: xr.Dataset, ax: Axes | None = None) -> Axes:
             ax.annotate(str(d), (f, row), xytext=(0, 7), textcoords="offset points",
                         ha="center", fontsize="x-small")
     ax.set_xscale("log")
+    if not np.all(np.isfinite(freq)):
+        ax.annotate("pinned (rigid) at the right edge", (1.0, 0.0), xycoords="axes fraction",
+                    ha="right", va="bottom", fontsize="x-small")
     ax.set_yticks(range(len(records)), records)
     ax.set_xlabel(label(res["frequency"]))
     ax.set_title("diaphragm frequency vs record significant range")
@@ -134,18 +180,34 @@ def plot_resonance(res: xr.Dataset, ax: Axes | None = None) -> Axes:
 
 def plot_cor_match(da: xr.DataArray, target: float | None = None,
                    paper_cor: float | None = None, ax: Axes | None = None) -> Axes:
-    """A response against COR, one line per record, with the target value (horizontal)
-    and the paper's best COR (vertical) when given (Section 5.2)."""
+    """A response against COR, one line per record run (lines that are all NaN, cells a
+    study did not run, are left out), with the target value (horizontal) and the paper's
+    best COR (vertical) when given. A response flat to round-off is drawn flat: the y-range
+    spans at least 1 % of its magnitude."""
     ax = ax if ax is not None else panels(None, 1)[0]
     others = [d for d in da.dims if d != "cor"]
-    if others:
-        stacked = da.stack(line=others)
-        for i in range(stacked.sizes["line"]):
-            line = stacked.isel(line=i)
-            tag = ", ".join(str(line[d].values) for d in others)
-            ax.plot(da["cor"].values, line.values, marker="o", ms=3, label=tag)
+    stacked = da.stack(line=others) if others else da.expand_dims(line=[0])
+    shown = []
+    for i in range(stacked.sizes["line"]):
+        line = stacked.isel(line=i)
+        if not np.isfinite(line.values).any():
+            continue
+        tag = ", ".join(str(line[d].values) for d in others) if others else str(da.name)
+        ax.plot(da["cor"].values, line.values, marker="o", ms=3, label=tag)
+        shown.append(line.values)
+    values = np.concatenate(shown) if shown else np.array([])
+    values = values[np.isfinite(values)]
+    if values.size:
+        lo, hi = float(values.min()), float(values.max())
+        if target is not None and np.isfinite(target):
+            lo, hi = min(lo, target), max(hi, target)
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        half = max(half, 0.005 * max(abs(mid), abs(lo), abs(hi)), 1e-300)
+        ax.set_ylim(mid - 1.2 * half, mid + 1.2 * half)
+        ax.ticklabel_format(axis="y", useOffset=False)
     else:
-        ax.plot(da["cor"].values, da.values, marker="o", ms=3, label=str(da.name))
+        ax.text(0.5, 0.5, "no finite response (e.g. no collapse at any COR)",
+                transform=ax.transAxes, ha="center", fontsize="small")
     if target is not None and np.isfinite(target):
         ax.axhline(target, color="k", ls="--", lw=0.8, label="target")
     if paper_cor is not None and np.isfinite(paper_cor):

@@ -14,6 +14,10 @@ missing batches are computed. The archive is written to a temporary name and ren
 sidecar folder is removed after that. The archive's ``history`` carries the time the run was
 first started, so a resumed run writes the same archive as an uninterrupted one.
 
+IDA studies (a study file with ``[study.ida]``) run through the same machinery: a batch
+is a group of walls of one diaphragm and record, and each cell is one collapse capacity
+(`urmx.fragility.run_ida_batch`, assembled by `urmx.fragility.assemble_ida`).
+
 Schedulers: ``None`` (default) starts a local ``dask.distributed`` cluster of worker
 processes, one per core (the numba kernel holds the GIL, so processes beat threads);
 ``"threads"`` the same with threads; ``"serial"`` runs in this process; any other string is a
@@ -22,7 +26,9 @@ scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it 
 
 :func:`run_study` reads a study file, resolves its records and writes the archive;
 :func:`run_grid` runs a grid built in code on records given in memory, with no archive
-(benchmarks); :func:`batch_tasks` lists the batches both hand to :func:`run_batch`.
+(benchmarks); :func:`batch_tasks` lists the batches both hand to :func:`run_batch` (IDA:
+`urmx.fragility.run_ida_batch`). :func:`grid_coords` and :func:`global_attrs` give the
+coordinates and global attributes every study kind's Dataset shares.
 """
 
 from __future__ import annotations
@@ -145,7 +151,8 @@ def _task(study: Study, batch: Batch, records: dict[str, RecordData],
 
 def batch_tasks(study: Study, records: dict[str, RecordData], batch_size: int = 16,
                 kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
-    """The batches of a study grid, each with the task a worker runs (:func:`run_batch`).
+    """The batches of a study grid, each with the task a worker runs (:func:`run_batch`;
+    for an IDA study `urmx.fragility.run_ida_batch`).
 
     Parameters
     ----------
@@ -154,7 +161,8 @@ def batch_tasks(study: Study, records: dict[str, RecordData], batch_size: int = 
     records : dict of RecordData
         The study's records by id (:func:`resolve_records`).
     batch_size : int
-        Target number of analyses per batch (walls are grouped to reach it). [1]
+        Target number of analyses per batch (walls are grouped to reach it); for an IDA
+        study, of cells (collapse capacities) of one diaphragm and record. [1]
     kernel : callable, optional
         Integrator with the signature of `urmx.kernel.run` (default).
 
@@ -164,6 +172,10 @@ def batch_tasks(study: Study, records: dict[str, RecordData], batch_size: int = 
         Each batch (its ``key`` set to a hash of everything that decides its result) and
         its task: plain Python and numpy values, picklable, no xarray.
     """
+    if study.ida is not None:
+        from . import fragility
+
+        return fragility.ida_tasks(study, records, batch_size, kernel)
     return [(b, _task(study, b, records, kernel)) for b in _batches(study, batch_size)]
 
 
@@ -231,8 +243,8 @@ def _load_part(path: Path) -> dict[str, np.ndarray] | None:
 class _Progress:
     """A one-line progress bar on stderr."""
 
-    def __init__(self, total: int, cells: int, enabled: bool):
-        self.total, self.cells, self.enabled = total, cells, enabled
+    def __init__(self, total: int, cells: int, enabled: bool, unit: str = "analyses"):
+        self.total, self.cells, self.enabled, self.unit = total, cells, enabled, unit
         self.done = 0
         self.start = _time.perf_counter()
 
@@ -243,7 +255,7 @@ class _Progress:
         frac = self.done / self.total
         bar = "#" * int(30 * frac)
         sys.stderr.write(f"\r[{bar:<30}] {self.done}/{self.total} batches "
-                         f"({int(frac * self.cells)}/{self.cells} analyses) "
+                         f"({int(frac * self.cells)}/{self.cells} {self.unit}) "
                          f"{_time.perf_counter() - self.start:.1f} s")
         if self.done == self.total:
             sys.stderr.write("\n")
@@ -302,10 +314,12 @@ def close_client(client: Any) -> None:
 
 
 def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], rec_ids: list[str],
-             scheduler: Any, on_result: Callable[[Batch, dict], None]) -> None:
+             scheduler: Any, on_result: Callable[[Batch, dict], None],
+             runner: Callable[[dict, np.ndarray], dict] | None = None) -> None:
+    runner = runner or run_batch
     if scheduler == "serial" or len(tasks) <= 1 and not hasattr(scheduler, "submit"):
         for batch, task in tasks:
-            on_result(batch, run_batch(task, records[rec_ids[batch.record]].acceleration))
+            on_result(batch, runner(task, records[rec_ids[batch.record]].acceleration))
         return
     from distributed import as_completed
 
@@ -315,7 +329,7 @@ def _compute(tasks: list[tuple[Batch, dict]], records: dict[str, RecordData], re
         acc = {rid: client.scatter(records[rid].acceleration, broadcast=True)
                for rid in {rec_ids[b.record] for b, _ in tasks}}
         for batch, task in tasks:
-            f = client.submit(run_batch, task, acc[rec_ids[batch.record]],
+            f = client.submit(runner, task, acc[rec_ids[batch.record]],
                               key=f"urmx-batch-{batch.key}", pure=False)
             futures[f.key] = (f, batch)
         for f in as_completed([f for f, _ in futures.values()]):
@@ -343,7 +357,7 @@ def run_grid(study: Study, records: dict[str, RecordData], scheduler: Any = "ser
     scheduler : "serial", None, "threads", address or distributed.Client
         As for :func:`run_study` (default here: this process).
     batch_size : int
-        Target number of analyses per batch. [1]
+        Target number of analyses (IDA study: cells) per batch. [1]
     kernel : callable, optional
         Integrator with the signature of `urmx.kernel.run` (default).
     command : str, optional
@@ -360,9 +374,10 @@ def run_grid(study: Study, records: dict[str, RecordData], scheduler: Any = "ser
     def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
         results[batch.key] = result
 
+    runner, assemble, _ = _kind(study)
     started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
-    _compute(tasks, records, study.records, scheduler, on_result)
-    return _assemble(study, records, tasks, results, started, command)
+    _compute(tasks, records, study.records, scheduler, on_result, runner)
+    return assemble(study, records, tasks, results, started, command)
 
 
 def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None = None,
@@ -394,11 +409,37 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     Returns
     -------
     xarray.Dataset
+
+    Notes
+    -----
+    A study with an ``[study.ida]`` table runs one collapse capacity per (wall, diaphragm,
+    record, cor) cell instead (`urmx.fragility.run_ida_batch`, assembled by
+    `urmx.fragility.assemble_ida`); then a batch holds up to ``batch_size`` cells of one
+    diaphragm and record.
     """
     if not isinstance(study, Study):
         study = load_study(study)
     records = resolve_records(study, records_dir)
     tasks = batch_tasks(study, records, batch_size, kernel)
+    return _execute(study, records, tasks, out, scheduler, progress, command)
+
+
+def _kind(study: Study) -> tuple[Callable, Callable, str]:
+    """(runner of a batch, assembly of the Dataset, what a cell is) of a study's kind: a grid
+    of analyses, or one collapse capacity per cell for an IDA study (`urmx.fragility`)."""
+    if study.ida is not None:
+        from . import fragility
+
+        return fragility.run_ida_batch, fragility.assemble_ida, "cells"
+    return run_batch, _assemble, "analyses"
+
+
+def _execute(study: Study, records: dict[str, RecordData], tasks: list[tuple[Batch, dict]],
+             out: str | os.PathLike | None, scheduler: Any, progress: bool,
+             command: str | None) -> xr.Dataset:
+    """Run the batches not already in ``<out>.parts/``, keep each as it finishes, assemble
+    the Dataset and write the archive (shared by every study kind)."""
+    runner, assemble, unit = _kind(study)
     parts = None
     results: dict[str, dict[str, np.ndarray]] = {}
     started = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
@@ -418,7 +459,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
                 if r is not None:
                     results[b.key] = r
     todo = [(b, t) for b, t in tasks if b.key not in results]
-    bar = _Progress(len(tasks), study.size, progress)
+    bar = _Progress(len(tasks), study.size, progress, unit)
     bar.done = len(tasks) - len(todo)
 
     def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
@@ -427,8 +468,8 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         results[batch.key] = result
         bar.update()
 
-    _compute(todo, records, study.records, scheduler, on_result)
-    ds = _assemble(study, records, tasks, results, started, command)
+    _compute(todo, records, study.records, scheduler, on_result, runner)
+    ds = assemble(study, records, tasks, results, started, command)
     if out is not None:
         write_netcdf(ds, out)
         shutil.rmtree(parts, ignore_errors=True)
@@ -444,8 +485,6 @@ def _coord(name: str, dims: Any, values: Any) -> xr.Variable:
 def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Batch, dict]],
               results: dict[str, dict[str, np.ndarray]], started: str,
               command: str | None) -> xr.Dataset:
-    from . import __version__
-
     dims = study.dims
     names = list(dims)
     shape = tuple(len(v) for v in dims.values())
@@ -474,6 +513,62 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
             attrs["comment"] = f"{INT_FILL} where the cell was not run"
         data_vars[name] = xr.Variable(names, arr, attrs=attrs)
 
+    coords = grid_coords(study, records)
+    for k in ("scale", "damping"):
+        if k in dims:
+            coords[k] = _coord(k, k, np.array(dims[k], dtype=np.float64))
+    if "impact" in dims:
+        coords["impact"] = _coord("impact", "impact", np.array(dims["impact"], dtype=object))
+
+    if study.histories:
+        labels = [h.label for h in study.histories]
+        time, hist_dt = _history_time(hist, labels)
+        coords.update({
+            "history": _coord("history", "history", np.array(labels, dtype=object)),
+            "history_wall": _coord("history_wall", "history",
+                                   np.array([h.wall for h in study.histories], dtype=object)),
+            "history_diaphragm": _coord("history_diaphragm", "history", np.array(
+                [h.diaphragm for h in study.histories], dtype=object)),
+            "history_record": _coord("history_record", "history",
+                                     np.array([h.record for h in study.histories], dtype=object)),
+            "history_cor": _coord("history_cor", "history",
+                                  np.array([h.cor for h in study.histories])),
+            "history_dt": _coord("history_dt", "history", np.array(hist_dt)),
+            "time": xr.Variable("time", time, attrs=variables.attrs("time")),
+        })
+        present = [v for v in variables.HISTORIES if v in hist[labels[0]]]
+        for v in present:
+            arr = np.full((len(labels), len(time)), np.nan)
+            for i, lab in enumerate(labels):
+                arr[i] = _on_grid(time, hist[lab]["time"], hist[lab][v], v == "pattern")
+            data_vars[v] = xr.Variable(("history", "time"), arr, attrs=variables.attrs(v))
+
+    return xr.Dataset(data_vars, coords=coords,
+                      attrs=global_attrs(study, started, command))
+
+
+def global_attrs(study: Study, started: str, command: str | None) -> dict[str, str]:
+    """Global attributes of a study archive (title, CF convention, ``history`` with the
+    time `started` and the `command`, the urmx version, the study file's text); shared by
+    every study kind."""
+    from . import __version__
+
+    cmd = command or f"urmx.run_study({study.name!r})"
+    return {
+        "title": study.title or study.name,
+        "Conventions": "CF-1.8",
+        "history": f"{started} urmx {__version__}: {cmd}",
+        "urmx_version": __version__,
+        "study_name": study.name,
+        "study": study.text,
+        "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
+    }
+
+
+def grid_coords(study: Study, records: dict[str, RecordData]) -> dict[str, xr.Variable]:
+    """Coordinates of the wall, diaphragm, record and cor dimensions, with the items'
+    properties (shared by every study kind)."""
+    dims = study.dims
     walls = [w.wall for w in study.walls]
     specimen = study.supports == SPECIMEN
     cell_walls = [[study.wall(s, d) for d in study.diaphragms] for s in study.walls]
@@ -509,46 +604,10 @@ def _assemble(study: Study, records: dict[str, RecordData], tasks: list[tuple[Ba
         "record_dt": _coord("record_dt", "record", np.array([r.dt for r in recs])),
         "cor": _coord("cor", "cor", np.array(dims["cor"], dtype=np.float64)),
     }
-    for k in ("scale", "damping"):
-        if k in dims:
-            coords[k] = _coord(k, k, np.array(dims[k], dtype=np.float64))
-    if "impact" in dims:
-        coords["impact"] = _coord("impact", "impact", np.array(dims["impact"], dtype=object))
-
-    if study.histories:
-        labels = [h.label for h in study.histories]
-        time, hist_dt = _history_time(hist, labels)
-        coords.update({
-            "history": _coord("history", "history", np.array(labels, dtype=object)),
-            "history_wall": _coord("history_wall", "history",
-                                   np.array([h.wall for h in study.histories], dtype=object)),
-            "history_diaphragm": _coord("history_diaphragm", "history", np.array(
-                [h.diaphragm for h in study.histories], dtype=object)),
-            "history_record": _coord("history_record", "history",
-                                     np.array([h.record for h in study.histories], dtype=object)),
-            "history_cor": _coord("history_cor", "history",
-                                  np.array([h.cor for h in study.histories])),
-            "history_dt": _coord("history_dt", "history", np.array(hist_dt)),
-            "time": xr.Variable("time", time, attrs=variables.attrs("time")),
-        })
-        present = [v for v in variables.HISTORIES if v in hist[labels[0]]]
-        for v in present:
-            arr = np.full((len(labels), len(time)), np.nan)
-            for i, lab in enumerate(labels):
-                arr[i] = _on_grid(time, hist[lab]["time"], hist[lab][v], v == "pattern")
-            data_vars[v] = xr.Variable(("history", "time"), arr, attrs=variables.attrs(v))
-
-    cmd = command or f"urmx.run_study({study.name!r})"
-    ds = xr.Dataset(data_vars, coords=coords, attrs={
-        "title": study.title or study.name,
-        "Conventions": "CF-1.8",
-        "history": f"{started} urmx {__version__}: {cmd}",
-        "urmx_version": __version__,
-        "study_name": study.name,
-        "study": study.text,
-        "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
-    })
-    return ds
+    if study.own_supports:
+        coords["supports"] = _coord("supports", "diaphragm", np.array(
+            [study.supports_of(d) for d in study.diaphragms], dtype=object))
+    return coords
 
 
 def _history_time(hist: dict, labels: list[str]) -> tuple[np.ndarray, list[float]]:

@@ -37,7 +37,7 @@ def registry() -> dict[str, dict[str, str]]:
     return tomllib.loads(text)
 
 
-def attrs(name: str, scope: str | None = None) -> dict[str, str]:
+def attrs(name: str, scope: str | None = None, **context: str) -> dict[str, str]:
     """CF attributes of a registered variable or coordinate: ``units`` (absent for ids,
     strings and flags), ``long_name`` and, where the registry has them, ``description``
     and ``comment``.
@@ -51,11 +51,16 @@ def attrs(name: str, scope: str | None = None) -> dict[str, str]:
         ``scope.name`` is used when the registry has one (``attrs("frequency",
         "spectrum")`` is a spectrum's frequency axis, ``attrs("frequency")`` a diaphragm's
         frequency).
+    **context : str
+        Values of the ``{placeholders}`` of entries whose units depend on a study setting
+        (an IDA study's intensity measure: ``im_units`` and ``im_name``, see
+        :func:`intensity_context`); ``attrs("collapse_intensity", **intensity_context("pga"))``.
 
     Raises
     ------
     KeyError
-        The name is not in the registry.
+        The name is not in the registry, or an entry holds a placeholder ``context`` does
+        not fill.
     """
     reg = registry()
     entry = reg.get(f"{scope}.{name}") if scope else None
@@ -65,21 +70,69 @@ def attrs(name: str, scope: str | None = None) -> dict[str, str]:
         except KeyError:
             raise KeyError(f"{name!r} is not in urmx's variable registry "
                            "(urmx/variables.toml)") from None
-    return {k: entry[k] for k in FIELDS if k in entry}
+    out = {k: entry[k] for k in FIELDS if k in entry}
+    if templated(entry):
+        try:
+            out = {k: v.format_map(context) for k, v in out.items()}
+        except KeyError as exc:
+            raise KeyError(f"{name!r} needs {exc.args[0]!r} (its units depend on the study's "
+                           "intensity measure: pass intensity_context(im))") from None
+    return out
+
+
+def templated(entry: dict[str, str]) -> bool:
+    """Whether a registry entry holds ``{placeholders}`` filled from a context."""
+    return any("{" in str(v) for v in entry.values())
+
+
+def intensity_context(im: str) -> dict[str, str]:
+    """The placeholders ``im_units`` and ``im_name`` of an intensity measure
+    (`urmx.fragility.IM_ATTRS`) for :func:`attrs`.
+
+    Raises
+    ------
+    KeyError
+        An unknown intensity measure.
+    """
+    from .fragility import IM_ATTRS
+
+    try:
+        units, long_name = IM_ATTRS[im]
+    except KeyError:
+        raise KeyError(f"unknown intensity measure {im!r} (known: "
+                       f"{', '.join(IM_ATTRS)})") from None
+    return {"im_units": units, "im_name": long_name}
 
 
 def stamp(obj, scope: str | None = None):
     """Set the registry's attributes on every registered variable and coordinate of an
     xarray Dataset or DataArray (in place; returned for chaining). Names the registry
-    does not know are left as they are."""
-    reg = registry()
+    does not know are left as they are.
 
-    def known(name) -> bool:
-        return name in reg or (scope is not None and f"{scope}.{name}" in reg)
+    Entries with placeholders take them from the object's ``intensity_measure`` attribute
+    (IDA archives); without it they are left as they are (never stamped as ``{im_units}``).
+    """
+    reg = registry()
+    context = {}
+    im = getattr(obj, "attrs", {}).get("intensity_measure")
+    if im is not None:
+        try:
+            context = intensity_context(str(im))
+        except KeyError:
+            context = {}
+
+    def entry(name):
+        if name is None:
+            return None
+        return (reg.get(f"{scope}.{name}") if scope is not None else None) or reg.get(name)
+
+    def update(target, name):
+        e = entry(name)
+        if e is not None and (context or not templated(e)):
+            target.attrs.update(attrs(name, scope, **context))
 
     for name in [*obj.coords, *getattr(obj, "data_vars", ())]:
-        if known(name):
-            obj[name].attrs.update(attrs(name, scope))
-    if not hasattr(obj, "data_vars") and known(obj.name):  # a DataArray itself
-        obj.attrs.update(attrs(obj.name, scope))
+        update(obj[name], name)
+    if not hasattr(obj, "data_vars"):  # a DataArray itself
+        update(obj, obj.name)
     return obj

@@ -15,9 +15,19 @@ To add a section, write its module and add it to `SECTIONS`; the name on the com
 and of the JSON file is the module's name.
 """
 
-from . import cost_growth, grid_scaling, guard, hard_cases, kernel, paper, work_precision
+from . import (
+    cost_growth,
+    fragility,
+    grid_scaling,
+    guard,
+    hard_cases,
+    kernel,
+    paper,
+    work_precision,
+)
 
-SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard]
+SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
+            fragility]
 
 #: names on the command line that run several sections
 GROUPS = {

@@ -1,5 +1,5 @@
 """`urmx paper` end to end from a cold start: a fresh Python process (imports, numba cache
-loads, a new local cluster, three studies, the reports), writing into a temporary folder.
+loads, a new local cluster, the paper's studies, the reports), writing into a temporary folder.
 
 Not part of ``all`` (it takes a while and reruns the paper): ask for it by name or with
 ``--paper``. Its lines follow the grid-scaling section of the report."""
@@ -43,7 +43,7 @@ def targets(p: dict) -> list[list[str]]:
 def render(p: dict) -> list[str]:
     """The paper timing, as a paragraph after the grid-scaling section."""
     L = [f"`urmx paper` end to end from a cold start (a fresh process: imports, numba "
-         f"cache, a new LocalCluster, three studies, the reports): **{p['seconds']:.1f} s**"
+         f"cache, a new LocalCluster, the paper's studies, the reports): **{p['seconds']:.1f} s**"
          f", exit code {p['returncode']} (target < {TARGET_PAPER:.0f} s: "
          f"{verdict(p['met'])}).", ""]
     if p["returncode"]:

@@ -11,7 +11,8 @@ def add_arguments(p) -> None:
     p.add_argument("what", nargs="*", default=["all"], metavar="NAME",
                    help="guard (the CI regression guard), render (rewrite the report from the "
                         "saved sections), all (default), a group (kernel, records, study, "
-                        "hard) or section names of benchmarks/sections")
+                        "hard) or section names of benchmarks/sections (fragility: the IDA "
+                        "study, not in all)")
     p.add_argument("--quick", action="store_true",
                    help="reduced sizes, to check the machinery (not the acceptance run)")
     p.add_argument("--out", default="reports/performance.md",

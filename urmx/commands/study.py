@@ -6,14 +6,15 @@ import sys
 import time
 from pathlib import Path
 
-PAPER_STUDIES = ("paper-single-storey", "paper-multi-storey", "verification")
+PAPER_STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
+                 "verification-intensity")
 
 
 def register(sub) -> None:
     p = sub.add_parser("run", help="run a study file into a netCDF archive (resumable)")
     p.add_argument("study", help="study TOML file, or the name of a catalog study")
     p.add_argument("--out", required=True, help="netCDF archive to write (FILE.nc)")
-    _common(p)
+    study_options(p)
     p.set_defaults(handler=_run)
 
     p = sub.add_parser("paper", help="run the paper's studies and write the reports")
@@ -21,7 +22,7 @@ def register(sub) -> None:
                    help="folder of the netCDF archives (default: results)")
     p.add_argument("--report", default="reports/paper",
                    help="folder of the figures and REPORT.md (default: reports/paper)")
-    _common(p)
+    study_options(p)
     p.set_defaults(handler=_paper)
 
     p = sub.add_parser("calibrate", help="fit the parametric building, write "
@@ -30,7 +31,9 @@ def register(sub) -> None:
     p.set_defaults(handler=_calibrate)
 
 
-def _common(p) -> None:
+def study_options(p) -> None:
+    """The options every study-running command takes (scheduler, records, batch size,
+    quiet)."""
     p.add_argument("--scheduler", default=None,
                    help='dask scheduler address (tcp://host:8786), "threads" or "serial"; '
                         "default: local worker processes, one per core")
@@ -40,7 +43,8 @@ def _common(p) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def _command() -> str:
+def command_line() -> str:
+    """The command as typed, for an archive's ``history`` attribute."""
     return "urmx " + " ".join(sys.argv[1:])
 
 
@@ -48,7 +52,7 @@ def _run(args) -> int:
     from ..study import run_study
 
     run_study(args.study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
-              batch_size=args.batch_size, records_dir=args.records, command=_command())
+              batch_size=args.batch_size, records_dir=args.records, command=command_line())
     print(args.out)
     return 0
 
@@ -69,7 +73,7 @@ def _paper(args) -> int:
             print(f"urmx paper: {name} -> {path}", file=sys.stderr)
             run_study(name, out=path, scheduler=client if client else "serial",
                       progress=not args.quiet, batch_size=args.batch_size,
-                      records_dir=args.records, command=_command())
+                      records_dir=args.records, command=command_line())
             archives.append(path)
     finally:
         if owned:
@@ -82,7 +86,7 @@ def _paper(args) -> int:
 
 
 def _calibrate(args) -> int:
-    from ..catalog import calibrate, calibration_report
+    from ..paper import calibrate, calibration_report
 
     result = calibrate()
     b = result.building

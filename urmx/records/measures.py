@@ -7,6 +7,8 @@ variable registry (``urmx/variables.toml``).
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numba
 import numpy as np
 import xarray as xr
@@ -20,6 +22,30 @@ DEFAULT_PERIODS = np.unique(np.concatenate([np.geomspace(0.02, 10.0, 120), [0.05
 
 #: default frequency grid of the smoothed Fourier spectrum [Hz]
 DEFAULT_FREQUENCIES = np.geomspace(0.05, 50.0, 300)
+
+
+def as_trace(record):
+    """An :class:`obspy.Trace` from a Trace (returned as it is) or an ``(array, dt)`` pair
+    of acceleration samples [m s-2] and their time step [s]."""
+    if hasattr(record, "stats") and hasattr(record, "data"):
+        return record
+    if isinstance(record, (tuple, list)) and len(record) == 2:
+        from obspy import Trace
+
+        acc, dt = record
+        acc = np.asarray(acc, dtype=float)
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError):
+            raise ValueError(f"dt={dt!r} must be a number of seconds") from None
+        if acc.ndim != 1 or acc.size < 2:
+            raise ValueError(f"acceleration must be a 1-D array of at least 2 samples "
+                             f"(got shape {acc.shape})")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt={dt!r} must be a positive time step in seconds")
+        return Trace(data=acc, header={"delta": dt})
+    raise ValueError(f"expected an obspy Trace or an (array, dt) pair, not "
+                     f"{type(record).__name__}")
 
 
 def _series(trace):
@@ -236,8 +262,8 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
 
     Parameters
     ----------
-    trace : obspy.Trace
-        Ground acceleration [m s-2].
+    trace : obspy.Trace or (array, dt)
+        Ground acceleration [m s-2] (with its time step [s] for an array).
     periods : array_like, optional
         Natural periods [s]; default ``DEFAULT_PERIODS`` (0.02-10 s).
     damping : float
@@ -249,7 +275,7 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
         ``sd`` [m], ``psv`` [m s-1], ``psa`` [m s-2] and ``sa`` (absolute acceleration)
         [m s-2] on dimension ``period`` [s].
     """
-    acc, dt = _series(trace)
+    acc, dt = _series(as_trace(trace))
     periods = np.asarray(DEFAULT_PERIODS if periods is None else periods, dtype=float)
     if np.any(periods < 0):
         raise ValueError("response_spectrum: periods must be >= 0 s")
@@ -274,8 +300,45 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
 
 # -- all scalar measures ---------------------------------------------------------------
 
+#: the scalar measures of :func:`measures`, in order (units and long names: the registry)
+MEASURES = ("pga", "pgv", "pgd", "arias_intensity", "significant_duration", "cav",
+            "rms_acceleration", "significant_frequency_low", "significant_frequency_high",
+            "predominant_frequency", "duration", "dt")
 
-def measures(trace) -> xr.Dataset:
+
+class _Intermediates:
+    """Integrals of a record that several measures share, each computed on first use."""
+
+    def __init__(self, trace, acc, dt):
+        self.trace, self.acc, self.dt = trace, acc, dt
+
+    @cached_property
+    def vel(self):
+        return _cumtrapz(self.acc, self.dt)
+
+    @cached_property
+    def arias(self):
+        return np.pi / (2.0 * STANDARD_GRAVITY) * _cumtrapz(self.acc * self.acc, self.dt)
+
+    @cached_property
+    def t(self):
+        return np.arange(self.acc.size) * self.dt
+
+    @cached_property
+    def t595(self):
+        ia = self.arias
+        return _crossing(self.t, ia, 0.05 * ia[-1]), _crossing(self.t, ia, 0.95 * ia[-1])
+
+    @cached_property
+    def frequency_range(self):
+        return significant_frequency_range(self.trace)
+
+    def rms(self):
+        win = (self.t >= self.t595[0]) & (self.t <= self.t595[1])
+        return np.sqrt(np.mean(self.acc[win] ** 2)) if win.any() else 0.0
+
+
+def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Dataset:
     """Scalar intensity measures of an acceleration trace.
 
     PGV and PGD come from trapezoidal integration of the trace as given; process
@@ -283,8 +346,16 @@ def measures(trace) -> xr.Dataset:
 
     Parameters
     ----------
-    trace : obspy.Trace
-        Acceleration [m s-2].
+    trace : obspy.Trace or (array, dt)
+        Acceleration [m s-2] (with its time step [s] for an array).
+    periods : array_like, optional
+        Natural periods at which to add the pseudo-spectral acceleration ``psa(period)``
+        (`response_spectrum`; period 0 gives the PGA). [s]
+    damping : float
+        Damping ratio of ``psa``. [1]
+    names : sequence of str, optional
+        Only these scalar measures (default: all); each is computed only when asked for
+        (``["pga", "pgv"]`` skips the Fourier spectra).
 
     Returns
     -------
@@ -293,25 +364,31 @@ def measures(trace) -> xr.Dataset:
         [m s-1], ``significant_duration`` [s], ``cav`` [m s-1], ``rms_acceleration``
         [m s-2], ``significant_frequency_low``/``_high`` [Hz],
         ``predominant_frequency`` [Hz], ``duration`` [s], ``dt`` [s]; each with
-        ``units`` and ``long_name``.
+        ``units`` and ``long_name``; with `periods`, also ``psa(period)`` [m s-2].
     """
+    trace = as_trace(trace)
     acc, dt = _series(trace)
-    vel = _cumtrapz(acc, dt)
-    dis = _cumtrapz(vel, dt)
-    ia = np.pi / (2.0 * STANDARD_GRAVITY) * _cumtrapz(acc * acc, dt)
-    t = np.arange(acc.size) * dt
-    t5, t95 = _crossing(t, ia, 0.05 * ia[-1]), _crossing(t, ia, 0.95 * ia[-1])
-    win = (t >= t5) & (t <= t95)
-    f_lo, f_hi = significant_frequency_range(trace)
-    values = {
-        "pga": np.max(np.abs(acc)), "pgv": np.max(np.abs(vel)), "pgd": np.max(np.abs(dis)),
-        "arias_intensity": ia[-1], "significant_duration": t95 - t5,
-        "cav": np.sum(np.abs(acc)) * dt,
-        "rms_acceleration": np.sqrt(np.mean(acc[win] ** 2)) if win.any() else 0.0,
-        "significant_frequency_low": f_lo, "significant_frequency_high": f_hi,
-        "predominant_frequency": predominant_frequency(trace),
-        "duration": (acc.size - 1) * dt, "dt": dt,
+    if names is None:
+        names = list(MEASURES)
+    unknown = [n for n in names if n not in MEASURES]
+    if unknown:
+        raise ValueError(f"unknown measure(s) {', '.join(map(repr, unknown))} (known: "
+                         f"{', '.join(MEASURES)})")
+    r = _Intermediates(trace, acc, dt)
+    compute = {
+        "pga": lambda: np.max(np.abs(acc)), "pgv": lambda: np.max(np.abs(r.vel)),
+        "pgd": lambda: np.max(np.abs(_cumtrapz(r.vel, dt))),
+        "arias_intensity": lambda: r.arias[-1],
+        "significant_duration": lambda: r.t595[1] - r.t595[0],
+        "cav": lambda: np.sum(np.abs(acc)) * dt, "rms_acceleration": r.rms,
+        "significant_frequency_low": lambda: r.frequency_range[0],
+        "significant_frequency_high": lambda: r.frequency_range[1],
+        "predominant_frequency": lambda: predominant_frequency(trace),
+        "duration": lambda: (acc.size - 1) * dt, "dt": lambda: dt,
     }
-    ds = xr.Dataset({k: ((), float(v), attrs(k)) for k, v in values.items()})
+    ds = xr.Dataset({k: ((), float(compute[k]()), attrs(k)) for k in names})
     ds.attrs["trace"] = trace.id
+    if periods is not None:
+        rs = response_spectrum(trace, np.atleast_1d(np.asarray(periods, dtype=float)), damping)
+        ds["psa"] = rs.psa.assign_attrs(damping=damping)
     return ds

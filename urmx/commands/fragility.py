@@ -1,0 +1,53 @@
+"""``urmx ida STUDY --out FILE.nc`` and ``urmx fragility-report FILE.nc``: thin commands over
+urmx.fragility (collapse capacities on a study grid; figures and tables of an archive)."""
+
+from __future__ import annotations
+
+
+def register(sub) -> None:
+    from .study import study_options
+
+    p = sub.add_parser(
+        "ida", help="collapse capacities of a study with [study.ida] into a netCDF archive "
+                    "(resumable)",
+        description="Run one collapse capacity (hunt and bisection on the record's scale "
+                    "factor) per (wall, diaphragm, record, cor) cell of a study whose file has "
+                    "an [study.ida] table, and write the archive with the lognormal fits. "
+                    "Interrupted runs resume: run the same command again.")
+    p.add_argument("study", help="study TOML file with [study.ida], or the name of a catalog "
+                                 "study (fema-p695-ida)")
+    p.add_argument("--out", required=True, help="netCDF archive to write (FILE.nc)")
+    study_options(p)
+    p.set_defaults(handler=_ida)
+
+    p = sub.add_parser(
+        "fragility-report", help="figures and tables of an IDA archive -> reports/fragility/",
+        description="IDA curves, fragility curves, median collapse intensity against "
+                    "slenderness and diaphragm frequency, and the effect of stiffening the "
+                    "diaphragm, from an archive written by `urmx ida`.")
+    p.add_argument("archive", metavar="FILE.nc", help="IDA archive")
+    p.add_argument("--out", default="reports/fragility", metavar="DIR",
+                   help="output folder (default: reports/fragility)")
+    p.set_defaults(handler=_report)
+
+
+def _ida(args) -> int:
+    from ..catalog import load_study
+    from ..study import run_study
+    from .study import command_line
+
+    study = load_study(args.study)
+    if study.ida is None:
+        raise ValueError(f"{study.path}: study {study.name!r} has no [study.ida] table (im, "
+                         "rtol, step, max_intensity); add one, or run it with `urmx run`")
+    run_study(study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
+              batch_size=args.batch_size, records_dir=args.records, command=command_line())
+    print(args.out)
+    return 0
+
+
+def _report(args) -> int:
+    from ..fragility_report import write_report
+
+    print(write_report(args.archive, args.out))
+    return 0

@@ -142,10 +142,22 @@ N_OUT = 10
 NPIECE = 312
 REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, constant
 
+# Compiled functions. The kernel's entry points (called from Python) are cached on disk
+# (urmx.jitcache); the helpers are compiled as part of them (their cached code holds the
+# helpers), with no Python wrapper and no cache of their own: that halves what a cold start
+# compiles and writes. No function allocates (``_nrt=False``: numba's reference counting of
+# every array argument cost more than the arithmetic); the kernel guards its own divisions
+# (``error_model="numpy"``: no zero-divisor test before each one).
+_FLAGS = dict(_nrt=False, error_model="numpy")
+entry = njit(cache=True, **_FLAGS)
+inner = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, **_FLAGS)
+inline = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline="always",
+              **_FLAGS)
+
 
 # ---- shared event semantics -----------------------------------------------------------
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _rowdot(A, i, x):
     """Row i of a padded matrix times a padded vector (no array view is created)."""
     out = 0.0
@@ -154,7 +166,7 @@ def _rowdot(A, i, x):
     return out
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def mode_index(h, fam, bl, bu, bla):
     """Index of a piece's tables: held state h, family, lower, upper and other-family
     lower branch (the last only with a held crack joint)."""
@@ -165,6 +177,11 @@ def mode_index(h, fam, bl, bu, bla):
     if h == 2:
         return 60 + (fam - 1) * 125 + (bl + 2) * 25 + (bu + 2) * 5 + (bla + 2)
     return 310 + (fam - 1)
+
+
+def piece_index(h: int, fam: int, bl: int, bu: int, bla: int) -> int:
+    """:func:`mode_index` for Python callers (the compiled one has no Python wrapper)."""
+    return mode_index.py_func(h, fam, bl, bu, bla)
 
 
 def piece_key(mid: int) -> tuple[int, int, int, int, int]:
@@ -179,7 +196,7 @@ def piece_key(mid: int) -> tuple[int, int, int, int, int]:
     return 3, mid - 310 + 1, 0, 0, 0
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, s, kp, kd, tg):
     """Event function k: e = s*(L[lrow] . y) + kp, falling through zero fires event kd."""
     for j in range(NP):
@@ -193,7 +210,7 @@ def _put(L, lrow, k, rows, vrows, agc, sig, kap, kind, tgt, s, kp, kd, tg):
     return k + 1
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _branch_bounds(P, case, b, collapse):
     """Interval of theta of the signed branch b: (low, high); the softening branch ends at
     theta0 when `collapse`, else it is continued without end."""
@@ -210,7 +227,7 @@ def _branch_bounds(P, case, b, collapse):
     return -far, -tb
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, vrows, agc,
                    sig, kap, kind, tgt):
     """The two event functions bounding the signed branch b of a curve on row L[lrow]:
@@ -224,7 +241,7 @@ def _branch_events(P, case, b, L, lrow, kind_branch, kind_collapse, k, rows, vro
                 kind_collapse if lo == -th0 else kind_branch, b - 1)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt):
     """With the crack joint held (theta2 = theta1) the lower curve, the upper curve and
     the other family's lower curve (its release test needs it) all follow theta1: two
@@ -264,7 +281,7 @@ def _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt):
     return k
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@entry
 def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt):
     """The event functions of the current piece, ``e = sig*(rows.y + vrows.y_d +
     agc*xg_dd) + kap`` (an event when e falls through zero); returns how many.
@@ -316,7 +333,7 @@ def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
     return k
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def set_family(P, ist, r, v, L):
     """Family from the pivot sides; branches re-classified where the family or the held
     state asks for it. Returns True when |theta1| is at or beyond the new case's theta0
@@ -343,7 +360,7 @@ def set_family(P, ist, r, v, L):
     return changed and abs(th1) >= curve(P, lower_case(fam))[1]
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _quad(Minv, L, i, j):
     """L[i] . Minv . L[j] over padded coordinates."""
     out = 0.0
@@ -355,7 +372,7 @@ def _quad(Minv, L, i, j):
     return out
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def impact_velocity(L, v, base, crack, cor, law, Minv, rot):
     """Velocity jump of an impact in padded coordinates.
 
@@ -401,7 +418,7 @@ def impact_velocity(L, v, base, crack, cor, law, Minv, rot):
         v[i] += s
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
     """Relative acceleration of the quantity of row L[lrow] (padded arrays)."""
     out = 0.0
@@ -413,12 +430,12 @@ def _row_acc(L, lrow, MK, MC, MR, MG, r, v, ag):
     return out
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _held_state(ist):
     return (1 if ist[I_BOPEN] == JOINT_HELD else 0) + (2 if ist[I_COPEN] == JOINT_HELD else 0)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _change_coords(GX, h_old, h_new, r, v, tmp):
     """Map a state to the coordinates of another held state (exact: selections)."""
     if h_old == h_new:
@@ -435,7 +452,7 @@ def _change_coords(GX, h_old, h_new, r, v, tmp):
             x[i] = s
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _reset_other(ist, which):
     """A closed or held joint has no side of its own: when joint `which` (0 base, 1 crack)
     opens, is released or changes side while the other is not open, the other's side is
@@ -446,7 +463,7 @@ def _reset_other(ist, which):
         ist[I_S] = -ist[I_C]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@entry
 def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, ag_now, MK,
                  MC, MR, MG, v_rest, counts, tmp):
     """Carry out one event at the current state (shared by both solvers; padded arrays).
@@ -542,7 +559,7 @@ def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, 
 
 # ---- numerics: Taylor series, scalar polynomials, roots --------------------------------
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
     """:func:`_taylor` over the first nn coordinates (nn a constant where inlined)."""
     big = 0.0
@@ -593,7 +610,7 @@ def _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, nn):
     return m
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _tail2(MK, MC, h, D, big):
     """The terms D[4:] of :func:`_taylor_n` for two coordinates, two terms a pass.
 
@@ -654,7 +671,7 @@ def _tail2(MK, MC, h, D, big):
     return m
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     """Taylor coefficients D[j] = r^(j)(0) h^j / j! of the exact solution on [0, h] of
     r_dd = -MK r - MC r_d - MR - MG (a0 + beta*t) (padded arrays; n reduced coordinates,
@@ -668,7 +685,7 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
     return _taylor_n(MK, MC, MR, MG, r0, v0, a0, beta, h, D, NP)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _sum_state(D, m, s, h, r, v):
     """r(s h) and r_d(s h) from the Taylor coefficients."""
     if s == 1.0:  # the same sums without the products by 1 (half the latency)
@@ -693,7 +710,7 @@ def _sum_state(D, m, s, h, r, v):
         v[i] = dp / h
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of sig*row.y + kap (displacement kind) or of
     row.y_dd + xg_dd (acceleration kind), row = R[ri]. Returns their number."""
@@ -715,7 +732,7 @@ def _scalar_poly(R, ri, D, m, acc_kind, h, a0, beta, sig, kap, cf):
     return m - 2
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig, kap, cf):
     """Coefficients in s = t/h of a release function sig*(row.y + vrow.y_d + agc*xg_dd)
     + kap on the Taylor series D of one sub-step. Returns their number."""
@@ -732,7 +749,7 @@ def _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig, kap, cf):
     return m
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
@@ -745,7 +762,7 @@ def _peval(cf, m, s):
     return p, dp, 2.0 * ddp
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _peval1(cf, m, s):
     """Polynomial value and first derivative, summed as even and odd parts in s^2
     (four Horner chains of half the length: the evaluation is latency-bound)."""
@@ -764,7 +781,7 @@ def _peval1(cf, m, s):
     return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _newton(cf, m, lo, hi, tol, guess, order):
     """Bracketed Newton for a sign change of the polynomial (order 0, positive at lo, on
     value and slope by :func:`_peval1`) or of its slope (order 1, an extremum, on slope
@@ -802,7 +819,7 @@ def _newton(cf, m, lo, hi, tol, guess, order):
     return a, b
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _hermite_root(p0, p1, m0, m1):
     """A starting point for :func:`_newton`: the root in (0, 1] of the cubic Hermite
     interpolant of p0 > 0 >= p1 with end slopes m0, m1 (a few safeguarded Newton steps
@@ -822,7 +839,7 @@ def _hermite_root(p0, p1, m0, m1):
     return s
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _lower_bound(cf, m):
     """A rigorous lower bound of the polynomial on [0, 1]: c0 - sum_j>=1 |c_j|."""
     out = cf[0]
@@ -831,7 +848,7 @@ def _lower_bound(cf, m):
     return out
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _positive_max(cf, m):
     """For a polynomial starting at or below zero with a positive slope and ending at or
     below zero: the point of its first maximum if that maximum is positive, else -1."""
@@ -849,7 +866,7 @@ def _positive_max(cf, m):
     return -1.0
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _first_nonpositive(cf, m, single_min):
     """A point s in (0, 1] where the polynomial (positive at 0) is <= 0, at or before
     its first interior minimum that reaches zero; 2.0 when it stays positive.
@@ -877,7 +894,7 @@ def _first_nonpositive(cf, m, single_min):
     return 2.0
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _hermite_ext(p0, p1, m0, m1):
     """Interior extrema of the cubic Hermite interpolant on [0, 1]: (min, max, s_min,
     s_max); +inf/-inf when none."""
@@ -914,7 +931,7 @@ def _hermite_ext(p0, p1, m0, m1):
 
 # ---- the integrator ---------------------------------------------------------------------
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
     """:func:`_point` over the first nn coordinates (a constant where inlined)."""
     for i in range(nn):
@@ -945,7 +962,7 @@ def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
         der[t] = b + beta
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
     """Tracker values and rates at one instant (accelerations absolute); acc and jerk
     are scratch arrays. Specialised to n = 2 like :func:`_taylor`."""
@@ -955,13 +972,13 @@ def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
         _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
     """:func:`_point_fast` on the padded loops, for the instants off the hot path."""
     _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
     for i in range(nn):
         s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
@@ -976,7 +993,7 @@ def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
         vb[i] = s2
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
     """The state after a whole sub-step by the exact propagator (rb, vb must not be r, v)."""
     if n == 2:
@@ -985,7 +1002,7 @@ def _propagate(E, PV, r, v, a0, beta, rb, vb, n):
         _propagate_n(E, PV, r, v, a0, beta, rb, vb, NP)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
     """The event functions of a piece as signed rows stored by column (RT[i, k] =
     sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
@@ -1006,7 +1023,7 @@ def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
     return rel
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _events_at_n(RT, KP, r, v, e, ed, nn):
     for k in range(MAX_EV):
         a = RT[0, k] * r[0]
@@ -1018,7 +1035,7 @@ def _events_at_n(RT, KP, r, v, e, ed, nn):
         ed[k] = b
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _events_at(RT, KP, r, v, e, ed, n):
     """Values and rates of all MAX_EV event functions at state (r, v)."""
     if n == 2:
@@ -1027,13 +1044,13 @@ def _events_at(RT, KP, r, v, e, ed, n):
         _events_at_n(RT, KP, r, v, e, ed, NP)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _events_now(RT, KP, r, v, e, ed):
     """:func:`_events_at` on the padded loops, for the instants off the hot path."""
     _events_at_n(RT, KP, r, v, e, ed, NP)
 
 
-@njit(cache=False, _nrt=False, error_model="numpy")
+@inner
 def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
     """The rate and ground terms of release functions, added to e and ed (held pieces)."""
     for k in range(MAX_EV):
@@ -1049,7 +1066,7 @@ def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
         ed[k] += b
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
     """False when no event function can have an event on the sub-step: none ends at
     or below zero, no closed contact may open, none dips towards zero."""
@@ -1060,7 +1077,7 @@ def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
     return flag
 
 
-@njit(cache=False, _nrt=False, error_model="numpy", inline='always')
+@inline
 def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
                 MG, r, v, a0, beta, H, n):
     """Peak update over [0, s_end*H] of a sub-step of length H from the end values and
@@ -1093,7 +1110,7 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
     return m_taylor
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@entry
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
     """One row of the histories: tilts, displacements, accelerations, pattern and the
     support-reduced coordinates r = N y and their rates."""
@@ -1111,7 +1128,7 @@ def record_row(hist, k, L, N, ist, r, v, val, nfull):
         hist[k, 9 + nfull + i] = _rowdot(N, i, v)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@entry
 def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, hist,
            want_hist, evlog):
     """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
@@ -1611,12 +1628,12 @@ class Tables:
         GMI = self.geo[3]
         groups: dict[tuple[int, int], list] = {}
         for key in keys:
-            if not self.ready[mode_index.py_func(*key)]:
+            if not self.ready[piece_index(*key)]:
                 groups.setdefault(key[:2], []).append(key)
         by_size: dict[int, list] = {}
         for (h, fam), ks in groups.items():
             ny = self._T[h].shape[1]
-            mids = np.array([mode_index.py_func(*k) for k in ks])
+            mids = np.array([piece_index(*k) for k in ks])
             bl, bu, bla = (np.array([k[i] for k in ks]) for i in (2, 3, 4))
             Minv = GMI[h, fam - 1, :ny, :ny]
             K, R0 = self._stiffness(h, 3 if fam == 1 else 2, bl, bu)
@@ -1634,7 +1651,7 @@ class Tables:
         for ny, items in by_size.items():
             self._propagators(ny, *(np.concatenate(x) for x in zip(*items, strict=True)))
         for ks in groups.values():
-            self.ready[[mode_index.py_func(*k) for k in ks]] = True
+            self.ready[[piece_index(*k) for k in ks]] = True
 
     def _release_rows(self, h, fam, bl, bu, bla) -> np.ndarray:
         """Unconstrained acceleration of each held joint's gap under each family, as rows

@@ -216,21 +216,22 @@ def _pack(w: Wall) -> np.ndarray:
 # The few functions the integration loop calls at events are compiled (numba) as part of
 # the kernel's entry points, which alone are cached on disk (urmx.jitcache); the matrices
 # of the pieces are built once per wall in numpy (they are not in any loop).
+_compiled = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 
-@njit(cache=False)
+@_compiled
 def lower_case(family):
     """Segment case of the lower segment: Case 3 in family 1, Case 2 in family 2."""
     return 3 if family == 1 else 2
 
 
-@njit(cache=False)
+@_compiled
 def curve(P, case):
     """(M0, theta0, Mi, theta_a, theta_b) of a segment case."""
     i = P_CASE + 5 * (case - 1)
     return P[i], P[i + 1], P[i + 2], P[i + 3], P[i + 4]
 
 
-@njit(cache=False)
+@_compiled
 def classify(P, case, theta, rate):
     """Signed branch of theta on a curve; on a boundary the side it is moving to wins."""
     M0, theta0, Mi, ta, tb = curve(P, case)

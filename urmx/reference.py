@@ -112,7 +112,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     def piece():
         """(n, mid, mode over y, padded mode, tracker rows, watch rows) of the piece."""
         h = int(ist[K.I_H])
-        mid = K.mode_index(h, ist[K.I_FAM], ist[K.I_BL], ist[K.I_BU], ist[K.I_BLA])
+        mid = K.piece_index(h, ist[K.I_FAM], ist[K.I_BL], ist[K.I_BU], ist[K.I_BLA])
         if not tab.ready[mid]:
             tab.build([K.piece_key(mid)])
         n = int(GNN[h])

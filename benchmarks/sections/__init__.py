@@ -23,11 +23,12 @@ from . import (
     hard_cases,
     kernel,
     paper,
+    statuses,
     work_precision,
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility]
+            fragility, statuses]
 
 #: names on the command line that run several sections
 GROUPS = {

@@ -19,7 +19,7 @@ def _energy_drift(wall: Wall, hist: dict, start: int) -> float:
     """Largest relative change of the mechanical energy (kinetic + trilinear strain energy
     of both segments) over the grid points from `start` on (a wall with both supports
     rigid: one coordinate, theta1)."""
-    from urmx.model import P_A1, P_A2, lower_case, potential, system
+    from urmx.model import P_A1, P_A2, potential, system
 
     P = wall.params
     r = hist["r"][start:, 0]
@@ -30,7 +30,7 @@ def _energy_drift(wall: Wall, hist: dict, start: int) -> float:
         f = int(fam[i]) if fam[i] in (1, 2) else 2
         M = system(P, f, 0, 0)[0][0, 0]
         th2 = -P[P_A1] / P[P_A2] * r[i]
-        E[i] = 0.5 * M * v[i] ** 2 + potential(P, lower_case(f), r[i]) + potential(P, 1, th2)
+        E[i] = 0.5 * M * v[i] ** 2 + potential(P, 3 if f == 1 else 2, r[i]) + potential(P, 1, th2)
     return float(np.max(np.abs(E - E[0])) / E[0])
 
 

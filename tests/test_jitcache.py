@@ -1,0 +1,76 @@
+"""The compiled kernel's on-disk cache cannot go stale (urmx.jitcache).
+
+numba keys a cached function on its own source file only, so a compiled function of
+kernel.py that calls one of model.py used to keep running the old model.py from disk after
+an edit. Here a copy of the package is edited as a developer (or an upgrade) would, and a
+new process must use the new physics without anyone clearing a cache.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import urmx
+
+SCRIPT = r"""
+import json, sys
+import numpy as np
+import urmx
+from urmx import kernel, reference
+wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                 top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
+t = np.arange(301) * 0.01
+ag = 4.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t / 2.0)
+out = {"kernel": kernel.run(wall, ag, 0.01), "file": urmx.__file__}
+if "reference" in sys.argv:
+    ref = reference.run(wall, ag, 0.01, rtol=1e-11)
+    out["reference"] = {k: v for k, v in ref.items() if k != "event_log"}
+print(json.dumps(out, default=float))
+"""
+PEAKS = ("peak_crack_displacement", "peak_top_displacement", "peak_top_acceleration",
+         "instability_ratio_lower", "instability_ratio_upper", "unfavourable_fraction")
+
+
+def _run(src: Path, *args: str) -> tuple[dict, str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_CACHE")}
+    env["PYTHONPATH"] = str(src)
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, *args], capture_output=True,
+                          text=True, env=env, cwd=src, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
+
+
+@pytest.mark.slow
+def test_changed_model_is_picked_up_without_clearing_any_cache(tmp_path):
+    src = tmp_path / "src"
+    shutil.copytree(Path(urmx.__file__).parent, src / "urmx",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    first, err = _run(src)
+    assert first["file"].startswith(str(src))
+    assert "compiling the kernel" in err
+    again, err = _run(src)
+    assert "compiling the kernel" not in err  # the cache works: loaded, not compiled
+    assert again["kernel"] == first["kernel"]
+    # a change of physics in a compiled function of model.py, which the kernel's compiled
+    # code calls: family 1 now takes the lower segment's Case 2 curve too
+    model = src / "urmx" / "model.py"
+    text = model.read_text()
+    old = '    return 3 if family == 1 else 2\n'
+    assert text.count(old) == 1
+    model.write_text(text.replace(old, '    return 2\n'))
+    edited, err = _run(src, "reference")
+    assert "compiling the kernel" in err
+    before, after = first["kernel"], edited["kernel"]
+    assert any(before[k] != after[k] for k in PEAKS)
+    # the new physics throughout: the reference solver (fresh compiled event functions of
+    # the edited model.py) agrees with the kernel
+    ref = edited["reference"]
+    for k in PEAKS[:-1]:
+        assert after[k] == pytest.approx(ref[k], rel=1e-8), k

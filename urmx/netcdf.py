@@ -10,6 +10,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .errors import writing
+
 
 def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     """netCDF4 encoding per variable: compressed outputs (NaN the fill value of floats, none
@@ -37,11 +39,12 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         The file written.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
-        os.replace(tmp, path)
+        with writing(path, "netCDF file"):  # a full disk, a folder removed meanwhile
+            path.parent.mkdir(parents=True, exist_ok=True)
+            ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
+            os.replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()

@@ -18,6 +18,7 @@ import xarray as xr
 
 from . import analysis as A
 from . import plot as P
+from .errors import InputError, MissingFileError
 from .markdown import table
 from .variables import attrs as registry_attrs
 
@@ -40,10 +41,13 @@ def open_archive(archive) -> xr.Dataset:
         return archive
     path = Path(archive)
     if not path.is_file():
-        raise FileNotFoundError(f"no study archive {str(path)!r}")
+        raise MissingFileError(f"no study archive {str(path)!r}")
     from .study import open_study
 
-    return open_study(path).load()
+    try:
+        return open_study(path).load()
+    except (OSError, ValueError) as exc:  # not netCDF, or damaged
+        raise InputError(f"{str(path)!r} is not a readable study archive: {exc}") from None
 
 
 def study_kind(ds: xr.Dataset) -> str | None:

@@ -11,6 +11,7 @@ import numba
 import numpy as np
 import xarray as xr
 
+from ..errors import InputError
 from ..variables import attrs, stamp
 from .readers import STANDARD_GRAVITY
 
@@ -24,7 +25,22 @@ DEFAULT_FREQUENCIES = np.geomspace(0.05, 50.0, 300)
 
 def _series(trace):
     acc = np.asarray(trace.data, dtype=float)
-    return acc, float(trace.stats.delta)
+    dt = float(trace.stats.delta)
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"trace {trace.id!r} has time step {dt!r} s; it must be positive")
+    return acc, dt
+
+
+def _check_damping(damping) -> float:
+    """A damping ratio in (0, 1) [1], or an InputError naming the value."""
+    try:
+        z = float(damping)
+    except (TypeError, ValueError):
+        raise InputError(f"damping={damping!r} must be a ratio in (0, 1)") from None
+    if not 0.0 < z < 1.0:
+        raise InputError(f"damping={damping!r} must be a ratio in (0, 1) (0.05 = 5 % of "
+                         "critical)")
+    return z
 
 
 def _cumtrapz(y, dt):
@@ -222,6 +238,11 @@ def sdof_displacement(acc, dt: float, period: float, damping: float = 0.05) -> n
 
     Exact for piecewise-linear ``acc`` [m s-2] sampled at ``dt`` [s]; starts at rest.
     """
+    damping = _check_damping(damping)
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"dt={dt!r} must be a positive time step in seconds")
+    if not (np.isfinite(period) and period > 0):
+        raise InputError(f"period={period!r} must be a positive period in seconds")
     omega = np.array([2.0 * np.pi / period])
     coef = nigam_jennings_coefficients(omega, damping, dt)
     p = -np.asarray(acc, dtype=float)
@@ -241,7 +262,7 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     periods : array_like, optional
         Natural periods [s]; default ``DEFAULT_PERIODS`` (0.02-10 s).
     damping : float
-        Damping ratio [1]; default 5 %.
+        Damping ratio in (0, 1) [1]; default 5 %.
 
     Returns
     -------
@@ -249,10 +270,13 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
         ``sd`` [m], ``psv`` [m s-1], ``psa`` [m s-2] and ``sa`` (absolute acceleration)
         [m s-2] on dimension ``period`` [s].
     """
+    damping = _check_damping(damping)
     acc, dt = _series(trace)
     periods = np.asarray(DEFAULT_PERIODS if periods is None else periods, dtype=float)
-    if np.any(periods < 0):
-        raise ValueError("response_spectrum: periods must be >= 0 s")
+    bad = periods[~(np.isfinite(periods) & (periods >= 0))]
+    if bad.size:
+        raise InputError(f"response_spectrum: period {bad[0]!r} s is not a finite period "
+                         ">= 0 s")
     pos = periods > 0
     omega = 2.0 * np.pi / periods[pos]
     coef = nigam_jennings_coefficients(omega, damping, dt)

@@ -12,16 +12,27 @@ import xarray as xr
 
 from .errors import writing
 
+#: fill value of the integer outputs (``collapsed``, ``base_impacts``, ``crack_impacts``)
+#: of study cells without a valid result
+INT_FILL = -1
+
 
 def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     """netCDF4 encoding per variable: compressed outputs (NaN the fill value of floats, none
-    for integers), no fill value on coordinates, strings as they are."""
+    for integers), no fill value on coordinates, strings as they are. Integer outputs held
+    as float with NaN (a study's cells without a valid result) are stored as int32 with the
+    CF ``_FillValue`` `INT_FILL`, which xarray masks on reading (float64 with NaN)."""
+    from .variables import INTEGER_SCALARS
+
     enc: dict[str, dict[str, Any]] = {}
     for name, var in ds.variables.items():
         if var.dtype == object:
             enc[name] = {}
         elif name in ds.coords:
             enc[name] = {"_FillValue": None}
+        elif name in INTEGER_SCALARS and var.dtype.kind == "f":
+            enc[name] = {"zlib": True, "complevel": 4, "dtype": "int32",
+                         "_FillValue": np.int32(INT_FILL)}
         elif np.issubdtype(var.dtype, np.integer):
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
         else:

@@ -279,3 +279,15 @@ def test_catalog_examples_still_load():
     for path in (project_root() / "catalog" / "studies").glob("*.toml"):
         load_study(path)
     assert os.path.isdir(project_root() / "catalog")
+
+
+@needs_records
+def test_simulate_takes_a_record_id_or_file():
+    """simulate(wall, "elcentro") loads the manifest record (it used to ask for dt)."""
+    wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=3000.0)
+    by_id = urmx.simulate(wall, "elcentro", scale=0.5)
+    tr = R.load("elcentro")
+    by_trace = urmx.simulate(wall, tr, scale=0.5)
+    assert by_id.attrs["dt"] == tr.stats.delta == 0.02
+    for name in ("peak_top_displacement", "instability_ratio", "base_impacts"):
+        assert float(by_id[name]) == float(by_trace[name])

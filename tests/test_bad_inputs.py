@@ -230,8 +230,8 @@ API = [
     ("peak-profiles-quantity", lambda f: urmx.analysis.peak_profiles(xr.Dataset(), "velocity"),
      E.InputError, "'velocity'"),
     ("records-dir", lambda f: _records_dir(f["tmp"] / "nope"), E.MissingFileError, "nope"),
-    ("read-wall-damping", lambda f: urmx.simulation.read_wall(f["wall_damp50"]),
-     E.InputError, "top_damping=50"),
+    ("read-wall-damping", lambda f: urmx.catalog.read_wall(f["wall_damp50"]),
+     CatalogError, "top_damping=50"),
 ]
 
 
@@ -275,7 +275,7 @@ def test_bugs_are_not_hidden(monkeypatch, capsys):
 def test_catalog_examples_still_load():
     """The damping check accepts every wall and study the project ships."""
     for path in (project_root() / "catalog" / "examples").glob("*.toml"):
-        urmx.simulation.read_wall(path)
+        urmx.catalog.read_wall(path)
     for path in (project_root() / "catalog" / "studies").glob("*.toml"):
         load_study(path)
     assert os.path.isdir(project_root() / "catalog")

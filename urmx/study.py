@@ -10,15 +10,25 @@ Resumable archives: with ``out=FILE.nc`` every finished batch is saved at once a
 ``.npz`` in the sidecar folder ``FILE.nc.parts/``, named by a hash of everything that decides
 its result (walls, record samples, scale factor, CORs, kernel, urmx version). A run that is
 stopped (Ctrl-C, a killed worker, a full disk) keeps those files; run it again and only the
-missing batches are computed. The archive is written to a temporary name and renamed, and the
-sidecar folder is removed after that. The archive's ``history`` carries the time the run was
-first started, so a resumed run writes the same archive as an uninterrupted one.
+missing batches are computed. Each part stores its key too, so a part copied or renamed from
+another batch, or cut short, is computed again. One run at a time holds the folder (an OS
+file lock); a second run on the same archive stops with a clear error. The archive is written
+to a temporary name and renamed, and the sidecar folder is removed after that. The archive's
+``history`` carries the time the run was first started, so a resumed run writes the same
+archive as an uninterrupted one.
+
+Missing results: every output of a cell whose status is not ``ok`` or ``collapsed`` (left
+out by the study's pairs, or stopped at the event limit) is NaN; the integer outputs are
+float64 in the Dataset and int32 with a CF ``_FillValue`` on disk, which xarray masks.
 
 Schedulers: ``None`` (default) starts a local ``dask.distributed`` cluster of worker
 processes, one per core (the numba kernel holds the GIL, so processes beat threads);
 ``"threads"`` the same with threads; ``"serial"`` runs in this process; any other string is a
 scheduler address (``tcp://host:8786``); a ``distributed.Client`` is used as it is
-(:func:`local_client` starts one on this machine, :func:`close_client` stops it).
+(:func:`local_client` starts one on this machine, :func:`close_client` stops it). A worker
+lost mid-run is survived: dask reruns its batches, and the record samples are tasks it can
+recompute, not scattered data. Ctrl-C reaches only this process (local workers have SIGINT
+blocked), which then closes the cluster.
 
 :func:`run_study` reads a study file, resolves its records and writes the archive;
 :func:`run_grid` runs a grid built in code on records given in memory, with no archive
@@ -382,9 +392,6 @@ def _quiet_worker() -> None:
     """Run in each local worker process: Ctrl-C in the terminal reaches the whole process
     group, but only the main process should handle it (it cancels the work and closes the
     cluster); workers that die of it print a traceback each."""
-    import signal
-    import threading
-
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 

@@ -126,7 +126,8 @@ def test_dataset_schema_and_values(fake_records, small):
     assert float(cell.instability_ratio) == pytest.approx(6.0 * 0.8 / 18.0, rel=1e-12)
     # s08 under "shake" at 0.8: ratio 4.8/8 = 0.6 (ok); every cell ran
     assert int(ds.status.sel(wall="s08", record="shake", cor=0.8, diaphragm="D5-pinned")) == 0
-    assert ds.base_impacts.dtype == np.int32 and int(ds.base_impacts.min()) == 7
+    # integer outputs are float64 in memory (NaN where no valid result), int32 on disk
+    assert ds.base_impacts.dtype == np.float64 and float(ds.base_impacts.min()) == 7
     # D1's frequency (median wall s18): sqrt(815e3 / (m_d + m/2)) / 2 pi with the catalog's
     # building: m = 22871.08 kg, m_d = 12869.50 kg
     assert float(ds.frequency[0]) == pytest.approx(
@@ -177,7 +178,7 @@ pairs = {s18 = ["shake"], c9 = ["quake", "shake"]}
     assert len(CALLS) == 3 * 3 * 2 * 2  # (s18, shake), (c9, quake), (c9, shake)
     assert (ds.status.sel(wall="s18", record="quake") == st.NOT_RUN).all()
     assert np.isnan(ds.peak_crack_displacement.sel(wall="s18", record="quake")).all()
-    assert (ds.base_impacts.sel(wall="s18", record="quake") == st.INT_FILL).all()
+    assert np.isnan(ds.base_impacts.sel(wall="s18", record="quake")).all()
     # c9 under quake x 2 at COR 0.71: 0.5*2*2.0 = 2.0 m s-2 * 2.79 m * 0.71 / 100
     v = ds.peak_crack_displacement.sel(wall="c9", record="quake", cor=0.71, scale=2.0,
                                        impact="contact", damping=0.05).squeeze()

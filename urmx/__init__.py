@@ -3,11 +3,15 @@
 Public API (heavy modules are imported on first use)::
 
     from urmx import Wall, simulate, run_study, open_study
+
+Every error urmx raises for bad input or a run it cannot accept is a `urmx.UrmxError`
+(module `urmx.errors`), with a one-line message naming the bad value.
 """
 
 from importlib.metadata import PackageNotFoundError, version
 
 from .config import UrmxWarning
+from .errors import UrmxError
 from .model import Wall
 
 try:
@@ -15,7 +19,8 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from a bare source tree
     __version__ = "0.0.0+unknown"
 
-__all__ = ["Wall", "simulate", "run_study", "open_study", "UrmxWarning", "__version__"]
+__all__ = ["Wall", "simulate", "run_study", "open_study", "UrmxWarning", "UrmxError",
+           "__version__"]
 
 _LAZY = {
     "simulate": ("urmx.simulation", "simulate"),
@@ -24,8 +29,8 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("analysis", "catalog", "fragility", "fragility_report", "guard", "kernel",
-               "markdown", "model", "netcdf", "paper", "plot", "records", "reference",
+_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_report", "guard",
+               "kernel", "markdown", "model", "netcdf", "paper", "plot", "records", "reference",
                "report", "simulation", "study", "variables")
 
 

@@ -16,7 +16,10 @@ Selection rules shared by all reductions (:func:`select`):
 - ``cor`` is taken nearest to the requested value (its first value when none is given, noted
   in ``attrs["selection"]``);
 - any other extra dimension (``scale``, ``impact``, ...) that the caller does not keep
-  is taken at its first value, and the choice is written to ``attrs["selection"]``.
+  is taken at its first value, and the choice is written to ``attrs["selection"]``;
+- cells without a valid result (``status`` other than ok/collapsed: not run, event-limit)
+  are NaN in every output (:func:`valid_cells`), so means, sums, counts and correlations
+  skip them.
 """
 
 from __future__ import annotations
@@ -28,12 +31,13 @@ import numpy as np
 import xarray as xr
 from scipy.stats import rankdata
 
+from .errors import InputError, UrmxError
+from .variables import SCALARS, stamp
 from .variables import attrs as registry_attrs
-from .variables import stamp
 
 GRID_DIMS = ("wall", "diaphragm", "record", "cor")
 
-class MissingDataError(ValueError):
+class MissingDataError(UrmxError, ValueError):
     """The study Dataset lacks a variable, coordinate or cell a reduction needs."""
 
 
@@ -43,6 +47,30 @@ def _require(ds: xr.Dataset, names: Iterable[str], what: str) -> None:
     missing = [n for n in names if n not in ds.variables]
     if missing:
         raise MissingDataError(f"{what} needs {', '.join(missing)} in the study Dataset")
+
+
+VALID_STATUS = ("ok", "collapsed")  # the statuses whose outputs are results
+
+
+def valid_cells(ds: xr.Dataset) -> xr.Dataset:
+    """The study with every output of a cell whose ``status`` is not ok or collapsed set to
+    NaN (integer outputs become float), so that reductions skip those cells.
+
+    ``status`` may be the codes of ``urmx.study.STATUS`` (0 ok, 1 collapsed, 2 event-limit,
+    3 not-run) or their names. A Dataset without ``status`` is returned as it is.
+    """
+    if not isinstance(ds, xr.Dataset) or "status" not in ds.variables:
+        return ds
+    status = ds["status"]
+    if status.dtype.kind in "OUS":
+        ok = status.isin(list(VALID_STATUS))
+    else:
+        ok = status.isin([0, 1])
+    out = ds.copy()
+    for name in ds.data_vars:
+        if name in SCALARS and set(status.dims) <= set(ds[name].dims):
+            out[name] = ds[name].where(ok).assign_attrs(ds[name].attrs)
+    return out
 
 
 def match_id(ds: xr.Dataset, dim: str, wanted: str) -> str:
@@ -159,9 +187,10 @@ def peak_profiles(ds: xr.Dataset, quantity: str, record: str,
     ``peak_top_<quantity>`` and ``peak_crack_<quantity>``. [m s-2] or [m]
     """
     if quantity not in ("acceleration", "displacement"):
-        raise ValueError(f"quantity must be 'acceleration' or 'displacement', not {quantity!r}")
+        raise InputError(f"quantity must be 'acceleration' or 'displacement', not {quantity!r}")
     names = [f"peak_top_{quantity}", f"peak_crack_{quantity}"]
     _require(ds, [*names, "slenderness"], f"the peak {quantity} profile")
+    ds = valid_cells(ds)
     out = select(ds[names], keep=("wall", "diaphragm"), cor=cor, record=record)
     out = stamp(out.sortby("slenderness"))
     out.attrs["record"] = str(out["record"].values)
@@ -172,6 +201,7 @@ def governing_instability(ds: xr.Dataset, cor: float | None = None) -> xr.DataAr
     """The governing instability ratio over (record, diaphragm, wall), walls sorted by
     slenderness."""
     _require(ds, ["instability_ratio", "slenderness"], "the stability figure")
+    ds = valid_cells(ds)
     out = select(ds["instability_ratio"], keep=("wall", "diaphragm", "record"), cor=cor)
     out = out.sortby("slenderness")
     out.attrs.update(registry_attrs("instability_ratio"))
@@ -300,6 +330,7 @@ def stability_table(ds: xr.Dataset, height: float, diaphragms: Sequence[str], re
     names = ["peak_lower_drift", "peak_upper_drift", "instability_ratio_upper",
              "instability_ratio_lower", "instability_ratio", "unfavourable_fraction"]
     _require(ds, names, "Table VI")
+    ds = valid_cells(ds)
     wall = nearest_wall(ds, height)
     ids = [match_id(ds, "diaphragm", d) for d in diaphragms]
     cell = select(ds[names], keep=("diaphragm",), cor=cor, record=record, wall=wall)
@@ -414,6 +445,7 @@ def resonance(ds: xr.Dataset, cor: float | None = None,
     stiffest diaphragm's) [1] and ``collapses`` (count over walls).
     """
     _require(ds, ["frequency", "stiffness", "instability_ratio"], "the resonance view")
+    ds = valid_cells(ds)
     ranges = frequency_ranges(ds, ranges)
     freq = ds["frequency"]
     if "wall" in freq.dims:
@@ -440,8 +472,9 @@ def resonance(ds: xr.Dataset, cor: float | None = None,
     })
     if "collapsed" in ds.variables:
         coll = select(ds["collapsed"], keep=("wall", "diaphragm", "record"), cor=cor)
-        out["collapses"] = coll.sum("wall").reset_coords(drop=True).transpose("diaphragm",
-                                                                              "record")
+        # count over walls with a valid result; NaN when none has one
+        out["collapses"] = coll.sum("wall", min_count=1).reset_coords(drop=True).transpose(
+            "diaphragm", "record")
     out = out.reset_coords(drop=True)
     for name in out.data_vars:
         out[name].attrs = registry_attrs(name)
@@ -469,6 +502,7 @@ def cor_matches(ds: xr.Dataset, targets: dict | None = None) -> xr.Dataset:
     Dataset over (wall, record) with ``best_cor`` and ``misfit``, coords
     ``target_variable(wall)`` and ``target_value(wall)``; walls without a target have NaN.
     """
+    ds = valid_cells(ds)
     given = {}
     for key, target in (targets or {}).items():
         try:

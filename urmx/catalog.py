@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from .config import project_root
+from .errors import MissingFileError, UrmxError
 from .model import RIGID, G, Wall
 
 if sys.version_info >= (3, 11):
@@ -50,8 +51,32 @@ WALL_FIELDS = ("thickness", "height", "crack_ratio", "mass", "bottom_mass", "top
 DIMS = ("wall", "diaphragm", "record", "cor", "scale", "impact", "damping")
 
 
-class CatalogError(ValueError):
+class CatalogError(UrmxError, ValueError):
     """A catalog or study file is invalid; the message names the file, key and line."""
+
+
+#: largest damping ratio accepted for a support (critical damping); larger values are
+#: almost surely percentages typed as ratios
+MAX_DAMPING = 1.0
+
+
+def damping_ratio_problem(name: str, value: Any) -> str | None:
+    """Why `value` is not a damping ratio in [0, `MAX_DAMPING`] (None when it is)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None  # a type error is reported by Wall itself
+    if math.isfinite(value) and value > MAX_DAMPING:
+        return (f"{name}={value!r} is not a damping ratio in [0, {MAX_DAMPING:g}] "
+                f"(0.12 means 12 % of critical; {value!r} looks like a percentage)")
+    return None
+
+
+def damping_problem(table: dict) -> str | None:
+    """The first damping field of a table of Wall fields that is not a ratio, or None."""
+    for name in ("bottom_damping", "top_damping"):
+        problem = damping_ratio_problem(name, table.get(name))
+        if problem:
+            return problem
+    return None
 
 
 def catalog_dir(path: str | os.PathLike | None = None) -> Path:
@@ -68,10 +93,14 @@ class _Source:
         self.path = Path(path)
         try:
             self.text = self.path.read_text(encoding="utf-8")
-            self.data = tomllib.loads(self.text)
         except FileNotFoundError:
-            raise FileNotFoundError(f"{self.path}: no such file") from None
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise MissingFileError(f"{self.path}: no such file") from None
+        except (OSError, UnicodeDecodeError) as exc:  # a folder, unreadable, not text
+            raise CatalogError(f"{self.path}: cannot be read as a TOML file "
+                               f"({getattr(exc, 'strerror', None) or exc})") from None
+        try:
+            self.data = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError as exc:
             raise CatalogError(f"{self.path}: not valid TOML: {exc}") from None
 
     def line(self, *needles: str) -> int | None:
@@ -216,6 +245,10 @@ def _wall_from_table(src: _Source, key: str, table: dict, **extra: Any) -> Wall:
                         f"{', '.join(WALL_FIELDS)})", *where, name)
     values = {k: table[k] for k in WALL_FIELDS if k in table}
     values.update(extra)
+    problem = damping_problem(values)
+    if problem:
+        bad = problem.split("=", 1)[0]
+        raise src.error(f"{key}.{bad}".lstrip("."), problem, *where, bad)
     try:
         return Wall(**values)
     except (TypeError, ValueError) as exc:
@@ -231,15 +264,15 @@ def read_wall(path: str | os.PathLike) -> Wall:
 
     Raises
     ------
-    FileNotFoundError
-        No such file.
+    urmx.errors.MissingFileError
+        No such file (a FileNotFoundError).
     CatalogError
         Not TOML, an unknown key, a missing or bad field: the message names the file, the
         key and (where it can be found) the line.
     """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"wall file {str(path)!r} does not exist")
+        raise MissingFileError(f"wall file {str(path)!r} does not exist")
     src = _Source(path)
     if "wall" not in src.data:
         return _wall_from_table(src, "", src.data)
@@ -267,6 +300,9 @@ def _diaphragm_from_table(src: _Source, key: str, ident: str, t: dict) -> Diaphr
     damping = t.get("damping", 0.12)
     if isinstance(damping, bool) or not isinstance(damping, (int, float)) or damping < 0:
         raise src.error(f"{key}.damping", f"{damping!r} must be a ratio >= 0", ident, "damping")
+    problem = damping_ratio_problem("damping", damping)
+    if problem:
+        raise src.error(f"{key}.damping", problem, ident, "damping")
     return Diaphragm(id=ident, stiffness=k if k == RIGID else float(k), damping=float(damping),
                      description=t.get("description", ""), direction=t.get("direction", ""))
 
@@ -512,7 +548,12 @@ def study_path(name: str | os.PathLike, catalog: str | os.PathLike | None = None
     p = Path(name)
     if p.suffix == ".toml" or p.exists():
         return p
-    return catalog_dir(catalog) / "studies" / f"{name}.toml"
+    found = catalog_dir(catalog) / "studies" / f"{name}.toml"
+    if not found.is_file():
+        known = sorted(f.stem for f in (catalog_dir(catalog) / "studies").glob("*.toml"))
+        raise MissingFileError(f"study {str(name)!r} is neither a file nor a catalog study "
+                               f"(catalog studies: {', '.join(known)})")
+    return found
 
 
 def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Study:
@@ -613,6 +654,11 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
             vals = _values(src, f"study.{k}", s[k], float)
             if any(v < 0 for v in vals):
                 raise src.error(f"study.{k}", "values must not be negative", k)
+            if k == "damping":
+                problem = next(filter(None, (damping_ratio_problem("damping", v)
+                                             for v in vals)), None)
+                if problem:
+                    raise src.error("study.damping", problem, "damping")
             extra[k] = vals
     extra = {k: extra[k] for k in DIMS if k in extra}
     tail = s.get("tail", 0.0)

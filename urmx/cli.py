@@ -2,6 +2,10 @@
 
 Each subcommand lives in ``urmx/commands/<name>.py`` and exposes ``register(subparsers)``;
 registration must stay cheap (heavy imports go inside the handler).
+
+Errors: a :class:`urmx.UrmxError` (bad input, a missing or unwritable file, a run that
+cannot proceed) is printed as one line and exits with status 2; Ctrl-C prints one line and
+exits with 130; anything else is a bug and shows its traceback.
 """
 
 from __future__ import annotations
@@ -9,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from pathlib import Path
 
 COMMANDS = ("simulate", "records", "study", "report", "bench", "fragility")
 
@@ -27,20 +32,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .errors import MissingFileError, UrmxError
+
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "handler", None):
         parser.print_help()
         return 2
     try:
+        records = getattr(args, "records", None)
+        if records is not None and not Path(records).expanduser().is_dir():
+            raise MissingFileError(f"--records {records!r}: no such folder")
         return int(args.handler(args) or 0)
     except KeyboardInterrupt:
-        print("urmx: interrupted", file=sys.stderr)
+        note = getattr(args, "interrupt_note", "")
+        print(f"urmx {args.command}: interrupted" + (f"; {note}" if note else ""),
+              file=sys.stderr)
         return 130
-    except (ValueError, FileNotFoundError, KeyError, OSError) as exc:
-        # user-facing errors: one clear line, never a traceback
-        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"urmx {args.command}: error: {msg}", file=sys.stderr)
+    except UrmxError as exc:  # bad input or a run that cannot proceed: one line
+        print(f"urmx {args.command}: error: {exc}", file=sys.stderr)
         return 2
 
 

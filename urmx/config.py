@@ -10,6 +10,8 @@ import os
 import sys
 from pathlib import Path
 
+from .errors import MissingFileError
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
@@ -42,10 +44,10 @@ def records_dir(records_dir: str | os.PathLike | None = None) -> Path:
                 if not Path(value).is_absolute():
                     value = cfg.parent / value
     if value is None:
-        raise FileNotFoundError(
+        raise MissingFileError(
             f"no records directory set: set {ENV}=/path/to/records (for example the "
             "shared/records folder beside this checkout) or pass --records DIR")
     path = Path(value).expanduser()
     if not path.is_dir():
-        raise FileNotFoundError(f"records directory {str(path)!r} (from {source}) does not exist")
+        raise MissingFileError(f"records directory {str(path)!r} (from {source}) does not exist")
     return path

@@ -79,6 +79,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import InputError
 from .model import RIGID, G, Wall
 
 IMS = ("pga", "pgv", "sa_wall", "sa_diaphragm", "scale")
@@ -211,21 +212,21 @@ def as_record(record: Any, records_dir=None) -> Record:
         try:
             dt = float(dt)
         except (TypeError, ValueError):
-            raise ValueError(f"record: dt={dt!r} must be a number of seconds") from None
+            raise InputError(f"record: dt={dt!r} must be a number of seconds") from None
         acc = np.ascontiguousarray(acc, dtype=np.float64)
         if acc.ndim != 1 or acc.size < 2:
-            raise ValueError(f"record: the samples must be a 1-D array of at least 2 values "
+            raise InputError(f"record: the samples must be a 1-D array of at least 2 values "
                              f"(got shape {acc.shape})")
         if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"record: dt={dt!r} must be a positive time step in seconds")
+            raise InputError(f"record: dt={dt!r} must be a positive time step in seconds")
         return Record(acc, dt, "array")
-    raise ValueError(f"record must be an obspy Trace, a manifest id or an (array, dt) pair, "
+    raise InputError(f"record must be an obspy Trace, a manifest id or an (array, dt) pair, "
                      f"not {type(record).__name__}")
 
 
 def _check_im(im: str) -> None:
     if im not in IMS:
-        raise ValueError(f"im={im!r} is not an intensity measure; use one of "
+        raise InputError(f"im={im!r} is not an intensity measure; use one of "
                          f"{', '.join(map(repr, IMS))}")
 
 
@@ -248,7 +249,7 @@ def record_intensity(record: Any, im: str = "pga", wall: Wall | None = None) -> 
     """
     _check_im(im)
     if im in ("sa_wall", "sa_diaphragm") and wall is None:
-        raise ValueError(f"im={im!r} needs the wall (its period)")
+        raise InputError(f"im={im!r} needs the wall (its period)")
     rec = as_record(record)
     return float(record_intensities(rec.acceleration, rec.dt, im, [wall])[0])
 
@@ -333,9 +334,9 @@ def _positive(name: str, value: Any) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name}={value!r} must be a number") from None
+        raise InputError(f"{name}={value!r} must be a number") from None
     if not (math.isfinite(x) and x > 0):
-        raise ValueError(f"{name}={value!r} must be a positive, finite number")
+        raise InputError(f"{name}={value!r} must be a positive, finite number")
     return x
 
 
@@ -459,17 +460,17 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = "pga", cor: float = 
     if kernel is None:
         from .kernel import run as kernel
     if not isinstance(wall, Wall):
-        raise ValueError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
+        raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
     rtol = _positive("rtol", rtol)
     if rtol >= 1.0:
-        raise ValueError(f"rtol={rtol!r} must be below 1 (relative width of the bracket)")
+        raise InputError(f"rtol={rtol!r} must be below 1 (relative width of the bracket)")
     step = _positive("step", step)
     if step <= 1.0:
-        raise ValueError(f"step={step!r} must be greater than 1 (the ratio of the hunt's "
+        raise InputError(f"step={step!r} must be greater than 1 (the ratio of the hunt's "
                          "geometric grid)")
     rec = as_record(record, records_dir)
     if not np.any(rec.acceleration):
-        raise ValueError(f"record {rec.id!r} is all zeros: it cannot collapse a wall")
+        raise InputError(f"record {rec.id!r} is all zeros: it cannot collapse a wall")
     unit = record_intensity(rec, im, wall)
     max_intensity = _positive("max_intensity", MAX_INTENSITY[im] if max_intensity is None
                               else max_intensity)
@@ -484,7 +485,7 @@ def _capacity(kernel, wall: Wall, acc: np.ndarray, dt: float, unit: float, im: s
     """`collapse_capacity` on validated inputs (a study's batches call it directly)."""
     pga = float(np.max(np.abs(acc)))
     if not (unit > 0 and pga > 0):
-        raise ValueError(f"record {label!r} is all zeros: it cannot collapse a wall")
+        raise InputError(f"record {label!r} is all zeros: it cannot collapse a wall")
     if start is None:
         s_start = START_FRACTION * static_acceleration(wall) / pga
     else:
@@ -550,7 +551,7 @@ def _minimise(nll, x0) -> np.ndarray:
     res = minimize(nll, x0, method="Nelder-Mead",
                    options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000})
     if not np.isfinite(res.fun):
-        raise ValueError("the lognormal fit found no finite likelihood")
+        raise InputError("the lognormal fit found no finite likelihood")
     return res.x
 
 
@@ -586,15 +587,16 @@ def fit_lognormal(capacities, censored=None) -> LognormalFit:
     c = (np.zeros(x.shape, dtype=bool) if censored is None
          else np.asarray(censored, dtype=bool).ravel())
     if c.shape != x.shape:
-        raise ValueError(f"censored has {c.size} entries, capacities {x.size}")
+        raise InputError(f"censored has {c.size} entries, capacities {x.size}")
     keep = np.isfinite(x)
     x, c = x[keep], c[keep]
     if np.any(x <= 0):
-        raise ValueError("capacities must be positive (intensities at collapse)")
+        raise InputError(f"capacities must be positive (intensities at collapse); got "
+                         f"{float(x[x <= 0][0])!r}")
     lx = np.log(x)
     obs, cen = lx[~c], lx[c]
     if np.unique(obs).size < 2:
-        raise ValueError(f"a lognormal fit needs at least two distinct uncensored capacities "
+        raise InputError(f"a lognormal fit needs at least two distinct uncensored capacities "
                          f"(got {obs.size} uncensored of {x.size})")
 
     def nll(p):
@@ -636,13 +638,13 @@ def fit_multiple_stripe(intensity, analyses, collapses) -> LognormalFit:
     n = np.broadcast_to(np.asarray(analyses), x.shape).astype(np.int64)
     z = np.asarray(collapses).ravel().astype(np.int64)
     if z.shape != x.shape:
-        raise ValueError(f"collapses has {z.size} entries, intensity {x.size}")
+        raise InputError(f"collapses has {z.size} entries, intensity {x.size}")
     if np.any(x <= 0) or not np.all(np.isfinite(x)):
-        raise ValueError("intensity levels must be positive and finite")
+        raise InputError("intensity levels must be positive and finite")
     if np.any(n < 1) or np.any(z < 0) or np.any(z > n):
-        raise ValueError("counts need 0 <= collapses <= analyses and analyses >= 1")
+        raise InputError("counts need 0 <= collapses <= analyses and analyses >= 1")
     if z.sum() == 0 or np.all(z == n):
-        raise ValueError("a multiple-stripe fit needs some stripes with survivors and some "
+        raise InputError("a multiple-stripe fit needs some stripes with survivors and some "
                          "with collapses")
     lx = np.log(x)
 
@@ -683,13 +685,29 @@ def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]
 
 # ---- the IDA study kind (run by urmx.study.run_study for a study with [study.ida]) -------
 
+#: the arrays every batch of :func:`run_ida_batch` returns (a saved part lacking one is
+#: computed again)
+IDA_OUTPUTS = ("capacity", "censored", "analyses", "event_limits", "intensity", "ratio",
+               "unit", "predominant")
+#: the outputs of an IDA archive with one value per (wall, diaphragm, record, cor) cell
+IDA_CELL_OUTPUTS = ("collapse_intensity", "censored", "analyses", "event_limits",
+                    "instability_ratio")
+IDA_MISSING = "NaN where the study's pairs leave the cell out (not run)"
+
+
+def ida_cells(task: dict) -> int:
+    """Cells (collapse capacities) of an IDA batch's task: walls x cor."""
+    return len(task["walls"]) * len(task["cor"])
+
+
 def ida_tasks(study, records, batch_size: int = 16, kernel=None) -> list:
     """Batches of an IDA study: up to `batch_size` cells (walls x cor) of one diaphragm and
-    one record, each with the hash key of everything that decides its result."""
+    one record, each with the hash key of everything that decides its result (the
+    settings, walls, record samples, urmx version and `urmx.jitcache.SOURCE_HASH`)."""
     import hashlib
     import json
 
-    from . import __version__
+    from . import __version__, jitcache
     from .study import Batch
 
     per = max(1, batch_size // len(study.cor))
@@ -708,7 +726,8 @@ def ida_tasks(study, records, batch_size: int = 16, kernel=None) -> list:
                 ident = dict(task, walls=[w.to_dict() for w in task["walls"]], record=rec.id,
                              record_digest=rec.digest, kind="ida", urmx=__version__,
                              kernel=None if kernel is None
-                             else f"{kernel.__module__}.{kernel.__qualname__}")
+                             else f"{kernel.__module__}.{kernel.__qualname__}",
+                             kernel_source=jitcache.SOURCE_HASH)
                 batch.key = "ida-" + hashlib.sha256(json.dumps(
                     ident, sort_keys=True, default=str).encode()).hexdigest()[:20]
                 out.append((batch, task))
@@ -781,16 +800,19 @@ def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
     import xarray as xr
 
     from . import variables
-    from .study import INT_FILL, global_attrs, grid_coords
+    from .netcdf import INT_FILL
+    from .study import global_attrs, grid_coords
 
     ida = study.ida
     ctx = variables.intensity_context(ida.im)
     shape = (len(study.walls), len(study.diaphragms), len(study.records), len(study.cor))
     k = max([results[b.key]["intensity"].shape[-1] for b, _ in tasks] or [1])
+    # every cell output is float64, NaN where the cell was not run (the flag and counts
+    # too, so that sums and means skip those cells; int32 with a _FillValue on disk)
     cap = np.full(shape, np.nan)
-    cen = np.zeros(shape, bool)
-    count = np.full(shape, INT_FILL, np.int32)
-    lim = np.full(shape, INT_FILL, np.int32)
+    cen = np.full(shape, np.nan)
+    count = np.full(shape, np.nan)
+    lim = np.full(shape, np.nan)
     inten = np.full((*shape, k), np.nan)
     ratio = np.full((*shape, k), np.nan)
     unit = np.full(shape[:3], np.nan)
@@ -814,8 +836,9 @@ def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
     median = np.full((shape[0], shape[1], shape[3]), np.nan)
     disp = np.full_like(median, np.nan)
     for iw, idp, ic in np.ndindex(median.shape):
+        ran = np.isfinite(cap[iw, idp, :, ic])
         try:
-            f = fit_lognormal(cap[iw, idp, :, ic], cen[iw, idp, :, ic])
+            f = fit_lognormal(cap[iw, idp, ran, ic], cen[iw, idp, ran, ic] == 1)
         except ValueError:
             continue
         median[iw, idp, ic], disp[iw, idp, ic] = f.median, f.dispersion
@@ -829,19 +852,21 @@ def assemble_ida(study, records, tasks, results, started: str, command) -> Any:
         a.update(extra)
         return a
 
+    stored = f"{IDA_MISSING}; stored as int32 with _FillValue {INT_FILL}, read as float64"
     data_vars = {
-        "collapse_intensity": xr.Variable(dims, cap, attrs=attrs("collapse_intensity")),
-        "censored": xr.Variable(dims, cen, attrs=attrs("censored")),
+        "collapse_intensity": xr.Variable(dims, cap, attrs=attrs("collapse_intensity",
+                                                                 comment=IDA_MISSING)),
+        "censored": xr.Variable(dims, cen, attrs=attrs(
+            "censored", comment=f"1 censored, 0 not; {stored}")),
         "instability_ratio": xr.Variable(curve, ratio, attrs=attrs(
             "instability_ratio", comment="IDA curve: one value per analysis of the cell, "
-            "ascending intensity; NaN after the cell's last analysis")),
+            "ascending intensity; NaN after the cell's last analysis and where the cell "
+            "was not run")),
         "median_collapse_intensity": xr.Variable(fit_dims, median,
                                                  attrs=attrs("median_collapse_intensity")),
         "dispersion": xr.Variable(fit_dims, disp, attrs=attrs("dispersion")),
-        "analyses": xr.Variable(dims, count, attrs=attrs(
-            "analyses", comment=f"{INT_FILL} where the cell was not run")),
-        "event_limits": xr.Variable(dims, lim, attrs=attrs(
-            "event_limits", comment=f"{INT_FILL} where the cell was not run")),
+        "analyses": xr.Variable(dims, count, attrs=attrs("analyses", comment=stored)),
+        "event_limits": xr.Variable(dims, lim, attrs=attrs("event_limits", comment=stored)),
         "record_intensity": xr.Variable(dims[:3], unit, attrs=attrs("record_intensity")),
     }
     coords = grid_coords(study, records)

@@ -29,6 +29,7 @@ import xarray as xr
 
 from . import plot as P
 from .analysis import spearman
+from .errors import InputError, MissingFileError
 from .markdown import number as _fmt
 from .markdown import table
 from .model import G
@@ -45,12 +46,15 @@ def open_ida(archive) -> xr.Dataset:
     else:
         path = Path(archive)
         if not path.is_file():
-            raise FileNotFoundError(f"no IDA archive {str(path)!r}")
+            raise MissingFileError(f"no IDA archive {str(path)!r}")
         from .study import open_study
 
-        ds = open_study(path).load()
+        try:
+            ds = open_study(path).load()
+        except (OSError, ValueError) as exc:  # not netCDF, or damaged
+            raise InputError(f"{str(path)!r} is not a readable IDA archive: {exc}") from None
     if "collapse_intensity" not in ds:
-        raise ValueError(f"{archive if not isinstance(archive, xr.Dataset) else 'Dataset'}: "
+        raise InputError(f"{archive if not isinstance(archive, xr.Dataset) else 'Dataset'}: "
                          "not an IDA archive (no collapse_intensity); write one with "
                          "`urmx ida STUDY --out FILE.nc`")
     return ds
@@ -104,7 +108,7 @@ def plot_ida_curves(ds: xr.Dataset, diaphragm: str, axes=None) -> list:
             ok = np.isfinite(x)
             ax.plot(x[ok], y[ok], color="0.55", lw=0.6, alpha=0.7)
             cap = float(cell.collapse_intensity) * f
-            if not bool(cell.censored):
+            if float(cell.censored) == 0:  # a collapse (1: censored; NaN: not run)
                 ax.plot([1.0], [cap], "o", ms=2.5, color="C3")
         med = float(c.median_collapse_intensity) * f
         if np.isfinite(med):
@@ -127,7 +131,7 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
     d = _cor(ds)
     labels = [str(x) for x in d.diaphragm.values]
     axes = P.panels(axes, len(labels), ncols=3)
-    top = float(np.nanmax(d.collapse_intensity.where(~d.censored))) * f * 1.2
+    top = float(np.nanmax(d.collapse_intensity.where(d.censored == 0))) * f * 1.2
     x = np.linspace(1e-3, top, 300)
     cmap = _colors(d)
     for ax, lab in zip(axes, labels, strict=True):
@@ -138,7 +142,7 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
             if np.isfinite(med):
                 ax.plot(x, norm.cdf(np.log(x / med) / beta), color=col, lw=1.2,
                         label=f"{w}")
-            cap = np.sort(c.collapse_intensity.where(~c.censored).values * f)
+            cap = np.sort(c.collapse_intensity.where(c.censored == 0).values * f)
             cap = cap[np.isfinite(cap)]
             n = c.record.size
             ax.plot(cap, (np.arange(cap.size) + 0.5) / n, ".", ms=2, color=col, alpha=0.6)
@@ -217,7 +221,7 @@ def resonance_table(ds: xr.Dataset) -> xr.Dataset:
         if len(flex) < 2:
             continue
         sub = d.sel(diaphragm=flex)
-        cap = sub.collapse_intensity.where(~sub.censored)
+        cap = sub.collapse_intensity.where(sub.censored == 0)
         lc = np.log(cap)
         rel = lc - lc.mean("diaphragm", skipna=False)
         ratio = sub.predominant_frequency / sub.cell_frequency
@@ -280,7 +284,7 @@ def stiffening(ds: xr.Dataset, soft: str = STIFFEN[0], stiff: str = STIFFEN[1]) 
             continue
         a, b = d.sel(diaphragm=pick[soft]), d.sel(diaphragm=pick[stiff])
         ratio = b.median_collapse_intensity / a.median_collapse_intensity
-        ok = ~(a.censored | b.censored)
+        ok = (a.censored == 0) & (b.censored == 0)  # both collapsed (NaN: not run)
         up = ((b.collapse_intensity > a.collapse_intensity) & ok).sum("record") \
             / ok.sum("record")
         out[g] = {"ratio": ratio, "share_up": up, "soft": pick[soft], "stiff": pick[stiff]}
@@ -402,7 +406,7 @@ def write_report(archive, out_dir: str | os.PathLike) -> Path:
     # ---- does h/t predict stability?
     rho = spearman(d.median_collapse_intensity.transpose("diaphragm", "wall").values,
                     np.broadcast_to(d.slenderness.values, (d.diaphragm.size, d.wall.size)))
-    cap = d.collapse_intensity.where(~d.censored).transpose("diaphragm", "record", "wall")
+    cap = d.collapse_intensity.where(d.censored == 0).transpose("diaphragm", "record", "wall")
     rho_rec = spearman(cap.values, np.broadcast_to(d.slenderness.values, cap.shape))
     lo_w, hi_w = d.wall.values[np.argmin(d.slenderness.values)], \
         d.wall.values[np.argmax(d.slenderness.values)]

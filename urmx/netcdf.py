@@ -10,12 +10,23 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .errors import writing
+
+#: fill value on disk of the integer and flag outputs (`urmx.variables.INTEGER_OUTPUTS`) of
+#: study cells without a valid result
+INT_FILL = -1
+
 
 def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     """netCDF4 encoding per variable: compressed outputs (NaN the fill value of floats, none
     for integers and booleans: a NaN fill cast to int8 would make True the fill value),
     no fill value on coordinates (multi-dimensional ones, such as the intensities of IDA
-    curves, compressed), strings as they are."""
+    curves, compressed), strings as they are. Integer and flag outputs held as float with
+    NaN (study cells without a valid result, `urmx.variables.INTEGER_OUTPUTS`) are stored
+    as int32 with the CF ``_FillValue`` `INT_FILL`, which xarray masks on reading (float64
+    with NaN)."""
+    from .variables import INTEGER_OUTPUTS
+
     enc: dict[str, dict[str, Any]] = {}
     for name, var in ds.variables.items():
         if var.dtype == object:
@@ -24,6 +35,9 @@ def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
             enc[name] = {"_FillValue": None}
             if var.ndim > 1:  # a grid of values (the intensities of IDA curves)
                 enc[name].update(zlib=True, complevel=4)
+        elif name in INTEGER_OUTPUTS and var.dtype.kind == "f":
+            enc[name] = {"zlib": True, "complevel": 4, "dtype": "int32",
+                         "_FillValue": np.int32(INT_FILL)}
         elif np.issubdtype(var.dtype, np.integer) or var.dtype == bool:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
         else:
@@ -41,11 +55,12 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         The file written.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
-        os.replace(tmp, path)
+        with writing(path, "netCDF file"):  # a full disk, a folder removed meanwhile
+            path.parent.mkdir(parents=True, exist_ok=True)
+            ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
+            os.replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()

@@ -31,8 +31,9 @@ import numpy as np
 import xarray as xr
 
 from . import analysis as A
-from .catalog import Catalog, catalog_dir, load_catalog
+from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
 from .config import project_root
+from .errors import MissingFileError
 from .markdown import table
 from .model import RIGID
 from .variables import attrs as registry_attrs
@@ -115,8 +116,14 @@ def _load_paper(path: str) -> Paper:
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such file (the paper's numbers)") from None
-    return Paper(tomllib.loads(text), Path(path))
+        raise MissingFileError(f"{path}: no such file (the paper's numbers)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CatalogError(f"{path}: cannot be read as a TOML file "
+                           f"({getattr(exc, 'strerror', None) or exc})") from None
+    try:
+        return Paper(tomllib.loads(text), Path(path))
+    except tomllib.TOMLDecodeError as exc:
+        raise CatalogError(f"{path}: not valid TOML: {exc}") from None
 
 
 def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float, float]]:
@@ -1055,6 +1062,7 @@ def verification(ds: xr.Dataset, paper: Paper | None = None,
     """
     paper = paper or load_paper()
     manifest = _manifest() if manifest is None else manifest
+    ds = A.valid_cells(ds)  # cells not run or stopped at the event limit: NaN
     ver = paper["verification"]
     targets = {w: ("collapse_time", float(v["collapse_time"])) for w, v in ver.items()
                if isinstance(v, dict) and "collapse_time" in v}
@@ -1107,6 +1115,7 @@ def intensity(ds: xr.Dataset, paper: Paper | None = None) -> list[dict[str, Any]
     ver = paper["verification"]
     if "scale" not in ds.dims:
         raise A.MissingDataError("the intensity archive has no scale dimension")
+    ds = A.valid_cells(ds)  # cells not run or stopped at the event limit: NaN
     rows = []
     for w in ds["wall"].values:
         spec = ver.get(str(w), {})
@@ -1119,10 +1128,12 @@ def intensity(ds: xr.Dataset, paper: Paper | None = None) -> list[dict[str, Any]
                 continue
             cell = cell.sel(cor=cor, method="nearest")
             g = (float(cell["scaled_pga"]) / 9.81) * np.asarray(cell["scale"].values, float)
-            coll = np.asarray(cell["collapsed"].values) == 1
+            flags = np.asarray(cell["collapsed"].values, float)  # NaN: no valid result
+            coll = flags == 1
             ct = np.asarray(cell["collapse_time"].values, float)
-            first = float(g[np.argmax(coll)]) if coll.any() else math.nan
-            below = float(g[np.argmax(coll) - 1]) if coll.any() and np.argmax(coll) > 0 \
+            i = int(np.argmax(coll))
+            first = float(g[i]) if coll.any() else math.nan
+            below = float(g[i - 1]) if coll.any() and i > 0 and flags[i - 1] == 0 \
                 else math.nan
             row = dict(wall=str(w), record=str(r), cor=float(cell["cor"]), pga_g=g.tolist(),
                        collapsed=coll.tolist(), collapse_time=ct.tolist(),

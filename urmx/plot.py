@@ -16,6 +16,8 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from .errors import InputError
+
 PANEL = (5.0, 3.6)  # inches per panel
 G = 9.81  # m s-2 per g, the value the paper uses
 DISPLAY_UNITS = {"m": ("mm", 1e3), "m s-2": ("g", 1.0 / G)}  # SI -> what engineers compare
@@ -59,7 +61,7 @@ def panels(axes, n: int, ncols: int | None = None) -> list[Axes]:
     if axes is not None:
         axes = list(np.ravel(axes))
         if len(axes) < n:
-            raise ValueError(f"this figure needs {n} axes, {len(axes)} were given")
+            raise InputError(f"this figure needs {n} axes, {len(axes)} were given")
         return axes[:n]
     ncols = ncols or n
     nrows = -(-n // ncols)

@@ -19,6 +19,7 @@ import xarray as xr
 
 from . import analysis as A
 from . import plot as P
+from .errors import InputError, MissingFileError
 from .markdown import number as _fmt
 from .markdown import table
 from .variables import attrs as registry_attrs
@@ -42,10 +43,13 @@ def open_archive(archive) -> xr.Dataset:
         return archive
     path = Path(archive)
     if not path.is_file():
-        raise FileNotFoundError(f"no study archive {str(path)!r}")
+        raise MissingFileError(f"no study archive {str(path)!r}")
     from .study import open_study
 
-    return open_study(path).load()
+    try:
+        return open_study(path).load()
+    except (OSError, ValueError) as exc:  # not netCDF, or damaged
+        raise InputError(f"{str(path)!r} is not a readable study archive: {exc}") from None
 
 
 def study_kind(ds: xr.Dataset) -> str | None:
@@ -331,21 +335,23 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
         ids = [str(d) for d in ds["diaphragm"].values]
         if paper.stiff not in ids or paper.pinned not in ids:
             raise A.MissingDataError(f"the study lacks {paper.stiff} or {paper.pinned}")
-        sel = A.select(ds, keep=("wall", "diaphragm", "record"), cor=paper.cor)
+        # cells without a valid result (not run, event limit) are NaN and left out
+        sel = A.select(A.valid_cells(ds), keep=("wall", "diaphragm", "record"), cor=paper.cor)
         spring, pinned = sel.sel(diaphragm=paper.stiff), sel.sel(diaphragm=paper.pinned)
         f = float(ds["frequency"].sel(diaphragm=paper.stiff))
         rows = []
 
         def pair(name, scale, r):
-            a, b = (float(np.median(x[name].sel(record=r))) * scale for x in (spring, pinned))
+            a, b = (float(np.nanmedian(x[name].sel(record=r))) * scale
+                    for x in (spring, pinned))
             return f"{a:.3g} / {b:.3g}"
 
         for r in _paper_order(ds, paper):
             a = spring["instability_ratio"].sel(record=r)
             b = pinned["instability_ratio"].sel(record=r)
             rel = ((a - b) / b).values
-            rows.append([r, f"{float(np.median(rel)):+.0%}", f"{float(np.min(rel)):+.0%} .. "
-                         f"{float(np.max(rel)):+.0%}",
+            rows.append([r, f"{float(np.nanmedian(rel)):+.0%}", f"{float(np.nanmin(rel)):+.0%} .. "
+                         f"{float(np.nanmax(rel)):+.0%}",
                          f"{int(spring['collapsed'].sel(record=r).sum())} / "
                          f"{int(pinned['collapsed'].sel(record=r).sum())}",
                          pair("peak_top_acceleration", 1 / P.G, r),
@@ -378,7 +384,8 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
                 for r in res["record"].values:
                     c = res.sel(diaphragm=d, record=r)
                     flag = "in range" if bool(c["in_range"]) else "outside"
-                    coll = f", {int(c['collapses'])} collapsed" if "collapses" in c else ""
+                    coll = (f", {int(c['collapses'])} collapsed"
+                            if "collapses" in c and np.isfinite(c["collapses"]) else "")
                     cells.append(f"{flag}; mean ratio {_fmt(c['mean_instability_ratio'], 2)} "
                                  f"({float(c['stability_change']):+.2f}){coll}")
                 rows.append([d, _fmt(res["frequency"].sel(diaphragm=d))] + cells)

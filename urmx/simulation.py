@@ -13,12 +13,15 @@ costs about 0.2 ms, a large share of one analysis.
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from . import __version__, variables
+from .errors import InputError, MissingFileError
 from .model import Wall
 
 METHODS = ("exact", "reference")
@@ -27,21 +30,50 @@ DEFAULT_RTOL = 1e-10  # relative tolerance of the reference method
 _SI_UNITS = {"m/s2", "m/s**2", "m/s^2", "m s-2", "m.s-2", "m/(s*s)"}
 
 
+def load_record(record: str | os.PathLike, records_dir: str | os.PathLike | None = None):
+    """A record named by a string: a record file (one channel) or a manifest record id.
+
+    Returns an ObsPy Trace in m s-2 (unscaled). Raises :class:`urmx.errors.MissingFileError`
+    naming `record` when it is neither an existing file nor a manifest id.
+    """
+    from . import records
+
+    path = Path(record)
+    if path.is_file():
+        stream = records.read(path)
+        if len(stream) != 1:
+            ids = ", ".join(tr.id for tr in stream)
+            raise InputError(f"record file {str(record)!r} holds {len(stream)} channels "
+                             f"({ids}); give a file with one channel")
+        return stream[0]
+    try:
+        known = records.manifest(records_dir)
+    except MissingFileError:
+        known = {}
+    if str(record) not in known:
+        raise MissingFileError(f"record {str(record)!r} is neither a file nor a manifest "
+                               "record id (see `urmx records list`)")
+    return records.load(str(record), records_dir)
+
+
 def _record(ground_acceleration: Any, dt: float | None) -> tuple[Any, float | None, str]:
     """Samples, time step and a label of the input; an ObsPy Trace gives its own dt."""
+    if isinstance(ground_acceleration, (str, os.PathLike)):
+        ground_acceleration = load_record(ground_acceleration)
     stats = getattr(ground_acceleration, "stats", None)
     if stats is None or not hasattr(ground_acceleration, "data"):
         if dt is None:
-            raise ValueError("dt is required when ground_acceleration is an array "
-                             "(give the record time step in seconds)")
+            raise InputError("dt is required when ground_acceleration is an array "
+                             "(give the record time step in seconds), or pass an ObsPy "
+                             "Trace, a record file or a manifest record id")
         return ground_acceleration, dt, "array"
     units = stats.get("units")
     if units is not None and str(units).strip().lower() not in _SI_UNITS:
-        raise ValueError(f"trace {stats.get('id', '')!s} has units {units!r}; "
+        raise InputError(f"trace {stats.get('id', '')!s} has units {units!r}; "
                          f"ground acceleration must be in m/s2")
     delta = float(stats.delta)
     if dt is not None and not math.isclose(float(dt), delta, rel_tol=1e-9):
-        raise ValueError(f"dt={dt!r} differs from the trace's stats.delta={delta!r}")
+        raise InputError(f"dt={dt!r} differs from the trace's stats.delta={delta!r}")
     return np.asarray(ground_acceleration.data, dtype=float), delta, str(stats.get("id", ""))
 
 
@@ -55,10 +87,11 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
     ----------
     wall : urmx.Wall
         The wall and its two supports.
-    ground_acceleration : array_like or obspy.Trace
+    ground_acceleration : array_like, obspy.Trace, str or path
         Ground acceleration samples, linearly interpolated between samples. [m s-2]
         A Trace gives its own time step (``stats.delta``) and, if ``stats.units`` is
-        set, it must be m/s2.
+        set, it must be m/s2. A string or path is a record file (read with
+        `urmx.records.read`) or a manifest record id (`urmx.records.load`), unscaled.
     dt : float, optional
         Record time step; required for arrays, optional for a Trace (must agree). [s]
     scale : float
@@ -92,17 +125,28 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
 
     Raises
     ------
-    ValueError
-        Unknown method, ``rtol`` with the exact method, a Trace not in m/s2, or a bad
-        input caught by :func:`urmx.kernel.check_inputs` (NaN/inf samples, ``dt <= 0``,
-        ``cor`` outside (0, 1], unknown impact law, ...).
+    urmx.errors.InputError
+        A :class:`ValueError`: unknown method, ``rtol`` with the exact method or outside
+        (0, 1), a Trace not in m/s2, or a bad input caught by
+        :func:`urmx.kernel.check_inputs` (NaN/inf samples, ``dt <= 0``, ``cor`` outside
+        (0, 1], unknown impact law, ...).
+    urmx.records.RecordError, urmx.errors.MissingFileError
+        A record named by a string cannot be read or found.
     """
+    from .kernel import check_inputs
+
     if method not in METHODS:
-        raise ValueError(f"method={method!r} is not a method; use 'exact' or 'reference'")
+        raise InputError(f"method={method!r} is not a method; use 'exact' or 'reference'")
     if method == "exact" and rtol is not None:
-        raise ValueError("rtol applies to method='reference' only; the exact method has no "
+        raise InputError("rtol applies to method='reference' only; the exact method has no "
                          "tolerance")
+    if rtol is not None and not (isinstance(rtol, (int, float)) and 0.0 < rtol < 1.0):
+        raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
     samples, dt, source = _record(ground_acceleration, dt)
+    try:
+        check_inputs(wall, samples, dt, scale, cor, impact, tail)
+    except ValueError as exc:  # the solvers' own argument checks
+        raise InputError(str(exc)) from None
     options = dict(scale=scale, cor=cor, impact=impact, tail=tail, history=history)
     if method == "exact":
         from .kernel import run

@@ -20,6 +20,10 @@ SCALARS = (
     "unfavourable_fraction", "base_impacts", "crack_impacts",
 )
 INTEGER_SCALARS = ("collapsed", "base_impacts", "crack_impacts")
+#: outputs of study cells that hold whole numbers or flags (a grid's integer scalars; an IDA
+#: study's censoring and analysis counts): float64 with NaN where a cell has no result in a
+#: Dataset, int32 with a CF ``_FillValue`` on disk (`urmx.netcdf.encoding`)
+INTEGER_OUTPUTS = (*INTEGER_SCALARS, "censored", "analyses", "event_limits")
 HISTORIES = (
     "theta_lower", "theta_upper", "base_displacement", "crack_displacement",
     "top_displacement", "base_acceleration", "crack_acceleration", "top_acceleration",

@@ -49,7 +49,9 @@ def run(args, suite=None) -> int:
         m = guard(update=args.update, baseline_path=args.baseline, quick=args.quick)
         return 0 if m["passed"] else 1
     if args.update or args.baseline:
-        raise ValueError("--update and --baseline apply to `urmx bench guard` alone")
+        from ..errors import InputError
+
+        raise InputError("--update and --baseline apply to `urmx bench guard` alone")
     suite = suite or _suite()
     print(suite.run(args.what, args.out, quick=args.quick, paper=args.paper,
                     window=args.window or None))
@@ -68,7 +70,9 @@ def _suite():
     if loaded is not None and getattr(loaded, "__file__", None) == str(folder / "__init__.py"):
         return loaded
     if not ((root / "pyproject.toml").is_file() and (folder / "__init__.py").is_file()):
-        raise FileNotFoundError(
+        from ..errors import MissingFileError
+
+        raise MissingFileError(
             "the benchmark suite is not installed with urmx: it is the benchmarks/ folder of a "
             "source checkout (run `urmx bench` from an editable install of the checkout, or "
             "`python -m benchmarks` in it); only `urmx bench guard` works without it")

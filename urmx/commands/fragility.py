@@ -32,22 +32,31 @@ def register(sub) -> None:
 
 
 def _ida(args) -> int:
-    from ..catalog import load_study
-    from ..study import run_study
-    from .study import command_line
+    from pathlib import Path
 
+    from ..catalog import load_study
+    from ..errors import InputError, check_output
+    from ..study import check_scheduler, run_study
+    from .study import command_line, run_resumable
+
+    check_output(args.out, "--out")
+    check_scheduler(args.scheduler)
     study = load_study(args.study)
     if study.ida is None:
-        raise ValueError(f"{study.path}: study {study.name!r} has no [study.ida] table (im, "
+        raise InputError(f"{study.path}: study {study.name!r} has no [study.ida] table (im, "
                          "rtol, step, max_intensity); add one, or run it with `urmx run`")
-    run_study(study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
-              batch_size=args.batch_size, records_dir=args.records, command=command_line())
+    run_resumable(args, Path(args.out), lambda: run_study(
+        study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
+        batch_size=args.batch_size, records_dir=args.records, command=command_line()))
     print(args.out)
     return 0
 
 
 def _report(args) -> int:
+    from ..errors import check_output, writing
     from ..fragility_report import write_report
 
-    print(write_report(args.archive, args.out))
+    check_output(args.out, "--out", folder=True)
+    with writing(args.out, "report folder"):
+        print(write_report(args.archive, args.out))
     return 0

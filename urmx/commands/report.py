@@ -16,8 +16,11 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    from urmx.errors import check_output, writing
     from urmx.report import write_report
 
-    path = write_report(args.archives, args.out)
+    check_output(args.out, "--out", folder=True)
+    with writing(args.out, "report folder"):
+        path = write_report(args.archives, args.out)
     print(path)
     return 0

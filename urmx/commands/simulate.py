@@ -36,6 +36,7 @@ def _trace(arg: str, dt: float | None, unit: str | None, records_dir):
     """The record as an ObsPy Trace in m s-2: a file, or else a manifest id."""
     from pathlib import Path
 
+    from urmx.errors import InputError, MissingFileError
     from urmx.records import load, manifest, read
 
     path = Path(arg)
@@ -43,17 +44,19 @@ def _trace(arg: str, dt: float | None, unit: str | None, records_dir):
         stream = read(path, dt=dt, unit=unit)
         if len(stream) != 1:
             ids = ", ".join(tr.id for tr in stream)
-            raise ValueError(f"record file {arg!r} holds {len(stream)} channels ({ids}); "
+            raise InputError(f"record file {arg!r} holds {len(stream)} channels ({ids}); "
                              f"give a file with one channel")
         return stream[0]
     try:
         ids = manifest(records_dir)
-    except FileNotFoundError:
+    except MissingFileError:
+        if records_dir is not None:
+            raise
         ids = {}
     if arg not in ids:
-        raise FileNotFoundError(f"record {arg!r} is neither a file nor a manifest record id")
+        raise MissingFileError(f"record {arg!r} is neither a file nor a manifest record id")
     if dt is not None or unit is not None:
-        raise ValueError(f"--dt and --unit apply to record files; {arg!r} is a manifest "
+        raise InputError(f"--dt and --unit apply to record files; {arg!r} is a manifest "
                          f"record that states its own")
     return load(arg, records_dir)
 
@@ -72,9 +75,13 @@ def _table(ds) -> str:
 
 def _run(args) -> int:
     from urmx.catalog import read_wall
+    from urmx.errors import check_output, writing
     from urmx.netcdf import write_netcdf
     from urmx.simulation import simulate
 
+    for option, path in (("--out", args.out), ("--plot", args.plot)):
+        if path:
+            check_output(path, option)
     wall = read_wall(args.wall)
     trace = _trace(args.record, args.dt, args.unit, args.records)
     history = bool(args.out or args.plot)
@@ -91,6 +98,7 @@ def _run(args) -> int:
     if args.plot:
         from urmx.plot import plot_simulation
 
-        plot_simulation(ds)[0].figure.savefig(args.plot, dpi=120)
+        with writing(args.plot, "figure"):
+            plot_simulation(ds)[0].figure.savefig(args.plot, dpi=120)
         print(f"wrote {args.plot}")
     return 0

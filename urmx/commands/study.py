@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
@@ -31,16 +32,26 @@ def register(sub) -> None:
     p.set_defaults(handler=_calibrate)
 
 
+def _batch_size(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be at least 1")
+    return value
+
+
 def study_options(p) -> None:
     """The options every study-running command takes (scheduler, records, batch size,
     quiet)."""
     p.add_argument("--scheduler", default=None,
-                   help='dask scheduler address (tcp://host:8786), "threads" or "serial"; '
-                        "default: local worker processes, one per core")
+                   help='dask scheduler address (tcp://host:8786), "threads", "processes" or '
+                        '"serial"; default: local worker processes, one per core')
     p.add_argument("--records", default=None, help="records folder (default $URMX_RECORDS)")
-    p.add_argument("--batch-size", type=int, default=16,
-                   help="analyses per batch (default 16)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--batch-size", type=_batch_size, default=16,
+                   help="analyses per batch, >= 1 (default 16)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
 
 
 def command_line() -> str:
@@ -48,20 +59,53 @@ def command_line() -> str:
     return "urmx " + " ".join(sys.argv[1:])
 
 
+def _kept(out: Path) -> str:
+    """What an interrupted or failed run left for the next one ('' when nothing)."""
+    parts = out.with_name(out.name + ".parts")
+    n = len(list(parts.glob("*.npz"))) if parts.is_dir() else 0
+    if not n:
+        return ""
+    return (f"{n} finished batch{'es' if n > 1 else ''} kept in {parts}/: run the same "
+            "command again to resume")
+
+
+def run_resumable(args, out: Path, run) -> None:
+    """Call `run` (a study run writing `out`); on Ctrl-C or a bug, say what is kept in
+    `out`'s parts folder for the next run."""
+    from ..errors import UrmxError
+
+    try:
+        run()
+    except KeyboardInterrupt:
+        args.interrupt_note = _kept(out)
+        raise
+    except UrmxError:
+        raise  # its message says what is kept
+    except Exception:
+        note = _kept(out)
+        if note:
+            print(f"urmx {args.command}: {note}", file=sys.stderr)
+        raise
+
+
 def _run(args) -> int:
     from ..study import run_study
 
-    run_study(args.study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
-              batch_size=args.batch_size, records_dir=args.records, command=command_line())
+    run_resumable(args, Path(args.out), lambda: run_study(
+        args.study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
+        batch_size=args.batch_size, records_dir=args.records, command=command_line()))
     print(args.out)
     return 0
 
 
 def _paper(args) -> int:
+    from ..errors import check_output, writing
     from ..report import write_report
-    from ..study import close_client, get_client, run_study
+    from ..study import check_scheduler, close_client, get_client, run_study
 
-    out = Path(args.out)
+    out = check_output(args.out, "--out", folder=True)
+    check_output(args.report, "--report", folder=True)
+    check_scheduler(args.scheduler)
     start = time.perf_counter()
     archives = []
     client, owned = (None, False)
@@ -71,27 +115,33 @@ def _paper(args) -> int:
         for name in PAPER_STUDIES:
             path = out / f"{name}.nc"
             print(f"urmx paper: {name} -> {path}", file=sys.stderr)
-            run_study(name, out=path, scheduler=client if client else "serial",
-                      progress=not args.quiet, batch_size=args.batch_size,
-                      records_dir=args.records, command=command_line())
+            run_resumable(args, path, lambda name=name, path=path: run_study(
+                name, out=path, scheduler=client if client else "serial",
+                progress=not args.quiet, batch_size=args.batch_size,
+                records_dir=args.records, command=command_line()))
             archives.append(path)
     finally:
         if owned:
             close_client(client)
     print(f"urmx paper: studies done in {time.perf_counter() - start:.1f} s", file=sys.stderr)
-    report = write_report(archives, args.report)
+    with writing(args.report, "report folder"):
+        report = write_report(archives, args.report)
     print(f"urmx paper: done in {time.perf_counter() - start:.1f} s: archives in {out}/, "
           f"report {report}", file=sys.stderr)
     return 0
 
 
 def _calibrate(args) -> int:
+    from ..errors import check_output, writing
     from ..paper import calibrate, calibration_report
 
+    if args.out is not None:
+        check_output(args.out, "--out", folder=True)
     result = calibrate()
     b = result.building
     print(f"least squares: wall_length = {b.wall_length:.4f} m, diaphragm_weight = "
           f"{b.diaphragm_weight:.4f} kPa (density {b.density:g} kg m-3), "
           f"RMS relative residual {result.rms:.4f}")
-    print(calibration_report(args.out))
+    with writing(args.out or "reports", "report folder"):
+        print(calibration_report(args.out))
     return 0

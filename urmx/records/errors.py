@@ -1,15 +1,18 @@
 """Errors raised by the record readers and the manifest.
 
-Every error is a :class:`ValueError` subclass (or :class:`FileNotFoundError` for a missing
-file), names the file and says what is wrong, so the CLI can print it as one line.
+Every error is a :class:`urmx.UrmxError` and a :class:`ValueError` (a missing file raises
+:class:`urmx.errors.MissingFileError`, a :class:`FileNotFoundError`), names the file and
+says what is wrong, so the CLI can print it as one line.
 """
 
 from __future__ import annotations
 
 import os
 
+from ..errors import UrmxError
 
-class RecordError(ValueError):
+
+class RecordError(UrmxError, ValueError):
     """A record file cannot be turned into a trustworthy acceleration history."""
 
     def __init__(self, path: str | os.PathLike | None, problem: str):
@@ -43,7 +46,8 @@ class MissingTimeStepError(RecordError):
 
 
 class UnsupportedRecordError(RecordError):
-    """A known file type that holds no usable acceleration (raw counts, spectra)."""
+    """A known file type that holds no usable acceleration (raw counts, spectra), or a
+    file urmx refuses to read because reading it could run code (a Python pickle)."""
 
 
 class ChecksumError(RecordError):

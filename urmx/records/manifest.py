@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..config import project_root
 from ..config import records_dir as _records_dir
+from ..errors import MissingFileError
 from .errors import ChecksumError, ManifestError
 
 if sys.version_info >= (3, 11):
@@ -51,7 +52,7 @@ def manifest(records_dir: str | os.PathLike | None = None,
     try:
         data = tomllib.loads(src.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise FileNotFoundError(f"record manifest {str(src)!r} does not exist") from None
+        raise MissingFileError(f"record manifest {str(src)!r} does not exist") from None
     except tomllib.TOMLDecodeError as exc:
         raise ManifestError(src, f"not valid TOML: {exc}") from None
     base = None
@@ -128,7 +129,7 @@ def load(record_id: str, records_dir: str | os.PathLike | None = None):
     e = entry(record_id, base)
     path = base / e["file"]
     if not path.is_file():
-        raise FileNotFoundError(f"record {record_id!r}: file {str(path)!r} is missing; it comes "
+        raise MissingFileError(f"record {record_id!r}: file {str(path)!r} is missing; it comes "
                                 f"from {e['source']}")
     digest = sha256(path)
     if digest != e["sha256"]:

@@ -13,6 +13,7 @@ import numba
 import numpy as np
 import xarray as xr
 
+from ..errors import InputError
 from ..variables import attrs, stamp
 from .readers import STANDARD_GRAVITY
 
@@ -37,20 +38,35 @@ def as_trace(record):
         try:
             dt = float(dt)
         except (TypeError, ValueError):
-            raise ValueError(f"dt={dt!r} must be a number of seconds") from None
+            raise InputError(f"dt={dt!r} must be a number of seconds") from None
         if acc.ndim != 1 or acc.size < 2:
-            raise ValueError(f"acceleration must be a 1-D array of at least 2 samples "
+            raise InputError(f"acceleration must be a 1-D array of at least 2 samples "
                              f"(got shape {acc.shape})")
         if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt={dt!r} must be a positive time step in seconds")
+            raise InputError(f"dt={dt!r} must be a positive time step in seconds")
         return Trace(data=acc, header={"delta": dt})
-    raise ValueError(f"expected an obspy Trace or an (array, dt) pair, not "
+    raise InputError(f"expected an obspy Trace or an (array, dt) pair, not "
                      f"{type(record).__name__}")
 
 
 def _series(trace):
     acc = np.asarray(trace.data, dtype=float)
-    return acc, float(trace.stats.delta)
+    dt = float(trace.stats.delta)
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"trace {trace.id!r} has time step {dt!r} s; it must be positive")
+    return acc, dt
+
+
+def _check_damping(damping) -> float:
+    """A damping ratio in (0, 1) [1], or an InputError naming the value."""
+    try:
+        z = float(damping)
+    except (TypeError, ValueError):
+        raise InputError(f"damping={damping!r} must be a ratio in (0, 1)") from None
+    if not 0.0 < z < 1.0:
+        raise InputError(f"damping={damping!r} must be a ratio in (0, 1) (0.05 = 5 % of "
+                         "critical)")
+    return z
 
 
 def _cumtrapz(y, dt):
@@ -248,6 +264,11 @@ def sdof_displacement(acc, dt: float, period: float, damping: float = 0.05) -> n
 
     Exact for piecewise-linear ``acc`` [m s-2] sampled at ``dt`` [s]; starts at rest.
     """
+    damping = _check_damping(damping)
+    if not (np.isfinite(dt) and dt > 0):
+        raise InputError(f"dt={dt!r} must be a positive time step in seconds")
+    if not (np.isfinite(period) and period > 0):
+        raise InputError(f"period={period!r} must be a positive period in seconds")
     omega = np.array([2.0 * np.pi / period])
     coef = nigam_jennings_coefficients(omega, damping, dt)
     p = -np.asarray(acc, dtype=float)
@@ -267,7 +288,7 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     periods : array_like, optional
         Natural periods [s]; default ``DEFAULT_PERIODS`` (0.02-10 s).
     damping : float
-        Damping ratio [1]; default 5 %.
+        Damping ratio in (0, 1) [1]; default 5 %.
 
     Returns
     -------
@@ -275,10 +296,13 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
         ``sd`` [m], ``psv`` [m s-1], ``psa`` [m s-2] and ``sa`` (absolute acceleration)
         [m s-2] on dimension ``period`` [s].
     """
+    damping = _check_damping(damping)
     acc, dt = _series(as_trace(trace))
     periods = np.asarray(DEFAULT_PERIODS if periods is None else periods, dtype=float)
-    if np.any(periods < 0):
-        raise ValueError("response_spectrum: periods must be >= 0 s")
+    bad = periods[~(np.isfinite(periods) & (periods >= 0))]
+    if bad.size:
+        raise InputError(f"response_spectrum: period {bad[0]!r} s is not a finite period "
+                         ">= 0 s")
     pos = periods > 0
     omega = 2.0 * np.pi / periods[pos]
     coef = nigam_jennings_coefficients(omega, damping, dt)
@@ -372,7 +396,7 @@ def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Datas
         names = list(MEASURES)
     unknown = [n for n in names if n not in MEASURES]
     if unknown:
-        raise ValueError(f"unknown measure(s) {', '.join(map(repr, unknown))} (known: "
+        raise InputError(f"unknown measure(s) {', '.join(map(repr, unknown))} (known: "
                          f"{', '.join(MEASURES)})")
     r = _Intermediates(trace, acc, dt)
     compute = {

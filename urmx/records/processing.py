@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError
 from .readers import STANDARD_GRAVITY
 
 
@@ -82,12 +83,12 @@ def scale(trace, factor: float | None = None, target_pga: float | None = None):
         The scaled copy; ``stats.scale_factor`` holds the factor applied.
     """
     if (factor is None) == (target_pga is None):
-        raise ValueError("scale: give exactly one of factor= or target_pga=")
+        raise InputError("scale: give exactly one of factor= or target_pga=")
     tr = trace.copy()
     pga = float(np.max(np.abs(tr.data)))
     if target_pga is not None:
         if pga == 0:
-            raise ValueError(f"scale: trace {tr.id} is all zeros, cannot reach a target PGA")
+            raise InputError(f"scale: trace {tr.id} is all zeros, cannot reach a target PGA")
         factor = target_pga / pga
     tr.data = tr.data * factor
     tr.stats.scale_factor = float(factor) * float(trace.stats.get("scale_factor", 1.0))

@@ -10,7 +10,11 @@ Supported: PEER NGA ``.AT2``; GeoNet ``.V1A``/``.V2A``; COSMOS V1/V2 (``.V1c``/`
 the raw-count ``V0c`` is refused); CDMG/CSMIP and USC Vol 1/Vol 2 text (including the
 film records' unevenly spaced (time, accel) pairs); USGS SMC; K-NET/KiK-net ASCII (via
 ObsPy); plain number columns (SLAMMER single column, several values per line, ``#``
-header lines, two-column time/accel); anything else :func:`obspy.read` reads.
+header lines, two-column time/accel); and the ObsPy formats of `OBSPY_FORMATS`.
+
+Only formats whose readers parse data are ever tried: ObsPy's ``PICKLE`` format unpickles
+the file (which can run any code), so it is neither detected nor accepted by name, and a
+file that looks like a Python pickle is refused before ObsPy sees it.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import UrmxWarning
+from ..errors import MissingFileError
 from .errors import (
     MissingTimeStepError,
     NonFiniteError,
@@ -55,6 +60,12 @@ MAX_PLAUSIBLE_PGA_G = 10.0
 _NICE_DT = (0.001, 0.002, 0.0025, 0.004, 0.005, 0.01, 0.02)
 
 FORMATS = ("peer", "geonet", "cosmos", "dmg", "smc", "knet", "columns")
+#: ObsPy waveform formats urmx detects and reads (parsers only, in ObsPy's order of
+#: preference); never ``PICKLE``, whose reader unpickles, i.e. can run code
+OBSPY_FORMATS = ("MSEED", "SAC", "GSE2", "SEISAN", "SACXY", "GSE1", "Q", "SH_ASC", "SLIST",
+                 "TSPAIR", "Y", "PDAS", "SEGY", "SU", "SEG2", "WAV", "WIN", "CSS",
+                 "NNSA_KB_CORE", "AH", "GCF", "REFTEK130", "RG16", "DMX",
+                 "KINEMETRICS_EVT")
 _ALIASES = {"at2": "peer", "nga": "peer", "v1a": "geonet", "v2a": "geonet", "csmip": "dmg",
             "cdmg": "dmg", "usc": "dmg", "kiknet": "knet", "slammer": "columns",
             "plain": "columns", "text": "columns"}
@@ -93,8 +104,8 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
         The record file.
     format : str, optional
         One of ``FORMATS`` (aliases ``at2``, ``v2a``, ``csmip``, ``usc``, ``slammer``, ...)
-        or an ObsPy format name (``MSEED``, ``SAC``, ...). Found from the content if
-        omitted.
+        or an ObsPy format name of ``OBSPY_FORMATS`` (``MSEED``, ``SAC``, ...). Found from
+        the content if omitted. Python pickles are never read.
     dt : float, optional
         Time step [s] for files that do not carry it (plain columns). For files that
         do, it must agree with the header; for uneven records it is the resampling step.
@@ -114,25 +125,37 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     ------
     RecordError
         A :class:`ValueError` subclass naming the file and the problem: unknown format,
-        truncated file, wrong point count, NaN, missing dt, unit mistakes, raw counts.
-    FileNotFoundError
-        The file does not exist.
+        truncated file, wrong point count, NaN, missing or non-positive dt, unit mistakes,
+        raw counts, a Python pickle.
+    urmx.errors.MissingFileError
+        The file does not exist (a :class:`FileNotFoundError`).
     """
     from obspy import Stream
 
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"record file {str(path)!r} does not exist")
+        raise MissingFileError(f"record file {str(path)!r} does not exist")
     if unit is not None and unit not in UNIT_FACTORS:
         raise RecordUnitError(path, f"unit {unit!r} is not one of {sorted(UNIT_FACTORS)}")
     if dt is not None and not (np.isfinite(dt) and dt > 0):
         raise MissingTimeStepError(path, f"dt must be a positive number of seconds, got {dt!r}")
-    fmt = detect_format(path) if format is None else _ALIASES.get(format.lower(), format.lower())
+    if format is None:
+        fmt = detect_format(path)
+        obspy_format = _detect_obspy(path) if fmt == "obspy" else None
+    else:
+        fmt = _ALIASES.get(format.lower(), format.lower())
+        obspy_format = None if fmt in _PARSERS else format.upper()
+        if obspy_format is not None and obspy_format not in OBSPY_FORMATS:
+            why = (" (ObsPy's PICKLE reader unpickles the file, which can run any code)"
+                   if obspy_format == "PICKLE" else "")
+            raise UnsupportedRecordError(
+                path, f"format {format!r} is not read by urmx{why}; formats: "
+                f"{', '.join(FORMATS)} or ObsPy's {', '.join(OBSPY_FORMATS)}")
     if fmt in _PARSERS:
         text = _read_text(path)
         channels = _PARSERS[fmt](path, text.splitlines())
     else:
-        channels = _parse_obspy(path, None if fmt == "obspy" else format)
+        channels = _parse_obspy(path, obspy_format)
     traces = [_to_trace(path, fmt, ch, dt, unit) for ch in channels]
     return Stream(traces)
 
@@ -155,13 +178,18 @@ def detect_format(path: str | os.PathLike) -> str:
     UnknownFormatError
         The content matches no supported format.
     UnsupportedRecordError
-        A recognised file that holds no acceleration history (e.g. CSMIP Vol 3 spectra).
+        A recognised file that holds no acceleration history (e.g. CSMIP Vol 3 spectra),
+        or a Python pickle.
     """
     path = Path(path)
     with open(path, "rb") as fh:
         head = fh.read(6000)
     if not head.strip():
         raise UnknownFormatError(path, "file is empty")
+    if _looks_like_pickle(head):
+        raise UnsupportedRecordError(
+            path, "file is a Python pickle: urmx never reads pickles, since unpickling can "
+            "run any code; convert the record to MiniSEED, SAC or text")
     if b"\x00" in head:
         return _obspy_or_unknown(path)
     text = head.decode("latin-1")
@@ -201,15 +229,39 @@ def _is_numeric_line(line: str) -> bool:
     return all(_FLOAT.fullmatch(tok) for tok in line.replace(",", " ").split())
 
 
-def _obspy_or_unknown(path: Path) -> str:
-    import obspy
+def _looks_like_pickle(head: bytes) -> bool:
+    """A Python pickle: protocol 2+ header, or ObsPy's own pickle marker near the start
+    (what ObsPy's PICKLE detector looks for before it unpickles)."""
+    if len(head) > 1 and head[0] == 0x80 and 2 <= head[1] <= 5:
+        return True
+    return b"obspy.core.stream" in head[:200]
 
-    try:
-        obspy.read(str(path), headonly=True)
-    except Exception:  # noqa: BLE001 - ObsPy raises many kinds; all mean "not mine"
+
+def _detect_obspy(path: Path) -> str | None:
+    """The first of `OBSPY_FORMATS` whose ObsPy detector accepts the file, or None."""
+    from obspy.core.util.base import ENTRY_POINTS, buffered_load_entry_point
+
+    entries = ENTRY_POINTS["waveform"]
+    for fmt in OBSPY_FORMATS:
+        ep = entries.get(fmt)
+        if ep is None:
+            continue
+        try:
+            is_format = buffered_load_entry_point(
+                ep.dist.name, f"obspy.plugin.waveform.{ep.name}", "isFormat")
+            if is_format(str(path)):
+                return fmt
+        except Exception:  # noqa: BLE001 - a detector that fails means "not mine"
+            continue
+    return None
+
+
+def _obspy_or_unknown(path: Path) -> str:
+    if _detect_obspy(path) is None:
         raise UnknownFormatError(
             path, "unknown record format: not PEER AT2, GeoNet V1A/V2A, COSMOS, CDMG/CSMIP, "
-            "USC, SMC, K-NET or plain numbers, and ObsPy does not recognise it") from None
+            "USC, SMC, K-NET, plain numbers or an ObsPy format urmx reads "
+            f"({', '.join(OBSPY_FORMATS)})")
     return "obspy"
 
 
@@ -545,8 +597,10 @@ def _parse_columns(path: Path, lines: list[str]) -> list[_Channel]:
 def _parse_obspy(path: Path, format: str | None) -> list[_Channel]:
     import obspy
 
+    if format is None or format.upper() not in OBSPY_FORMATS:  # never auto-detect
+        raise UnknownFormatError(path, f"ObsPy format {format!r} is not one urmx reads")
     try:
-        st = obspy.read(str(path), format=format.upper() if format else None)
+        st = obspy.read(str(path), format=format.upper())
     except Exception as exc:  # noqa: BLE001
         raise UnknownFormatError(path, f"ObsPy cannot read it as {format or 'any format'}: "
                                  f"{exc}") from None
@@ -593,7 +647,7 @@ def _to_trace(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | 
         file_unit = unit or ch.unit
     if file_unit is None:
         raise RecordUnitError(path, f"{fmt} file does not state its unit; pass unit= one of "
-                              f"{sorted(UNIT_FACTORS)}")
+                              f"{sorted(UNIT_FACTORS)} (--unit on the command line)")
     processing = [f"urmx.records.read: {fmt} file {name!r} ({ch.note})"]
     if ch.times is None:
         if ch.dt is not None and dt is not None and not math.isclose(ch.dt, dt, rel_tol=1e-6):
@@ -601,7 +655,8 @@ def _to_trace(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | 
         step = ch.dt if ch.dt is not None else dt
         if step is None:
             raise MissingTimeStepError(path, f"{fmt} file does not carry its time step; "
-                                       "pass dt= in seconds (SLAMMER files: see EQdata.txt)")
+                                       "pass dt= in seconds (--dt on the command line; "
+                                       "SLAMMER files: see EQdata.txt)")
         n_comment = ch.extra.get("npts_comment")
         if n_comment is not None and n_comment != values.size:
             warnings.warn(f"{path}: header comment says {n_comment} points but the file holds "
@@ -616,6 +671,9 @@ def _to_trace(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | 
         values, step, msg = _resample_uneven(path, ch.times, values, dt)
         warnings.warn(f"{path}: {label} {msg}", UrmxWarning, stacklevel=3)
         processing.append(f"urmx: {msg}")
+    if not (math.isfinite(step) and step > 0):
+        raise MissingTimeStepError(path, f"{label} has time step dt={step!r} s; a time step "
+                                   "must be a positive number of seconds")
     factor = _HEADER_UNITS[file_unit]
     data = values * factor
     if file_unit != "m/s2":

@@ -23,12 +23,6 @@ from urmx.cli import main
 from urmx.config import project_root
 from urmx.config import records_dir as _records_dir
 
-try:
-    RECORDS = _records_dir()
-except E.UrmxError:
-    RECORDS = None
-needs_records = pytest.mark.skipif(RECORDS is None, reason="set URMX_RECORDS")
-
 AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
        "ACCELERATION TIME SERIES IN UNITS OF G\nNPTS=  8, DT=   {dt} SEC\n"
        "  1.0E-02  2.0E-02  3.0E-02 -2.0E-02 -1.0E-02\n  0.0E+00  1.0E-02  0.0E+00\n")
@@ -175,10 +169,9 @@ def test_cli_bad_input(files, capsys, template, needle):
     _check_cli(template, needle, files, capsys)
 
 
-@needs_records
 @pytest.mark.parametrize(("template", "needle"), [c[1:] for c in CLI_RECORDS],
                          ids=[c[0] for c in CLI_RECORDS])
-def test_cli_bad_input_with_records(files, capsys, template, needle):
+def test_cli_bad_input_with_records(records_dir, files, capsys, template, needle):
     import dask
     import distributed  # noqa: F401 - its config defaults must exist before the override
 
@@ -318,8 +311,7 @@ def test_catalog_examples_still_load():
     assert os.path.isdir(project_root() / "catalog")
 
 
-@needs_records
-def test_simulate_takes_a_record_id_or_file():
+def test_simulate_takes_a_record_id_or_file(records_dir):
     """simulate(wall, "elcentro") loads the manifest record (it used to ask for dt)."""
     wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=3000.0)
     by_id = urmx.simulate(wall, "elcentro", scale=0.5)

@@ -714,12 +714,9 @@ def test_progress_lines_in_a_log_file_and_bar_on_a_terminal():
 def test_ctrl_c_gives_one_line(tmp_path):
     """SIGINT to the whole process group of `urmx run` (what Ctrl-C in a terminal does)
     once a few batches are saved: exit 130 and one line saying what is kept."""
-    from urmx.config import records_dir
+    from .fixtures.records import records_folder
 
-    try:
-        rdir = records_dir()
-    except UrmxError:
-        pytest.skip("set URMX_RECORDS to the shared records folder")
+    rdir = records_folder()
     ids = [e["id"] for e in urmx.records.manifest(rdir).values()
            if e["set"] == "fema-p695-far-field"]
     study = tmp_path / "big.toml"

@@ -1,11 +1,14 @@
-"""The kernel regression guard behind ``urmx bench guard`` (run by ``.ci/run``, < 30 s).
+"""The kernel regression guard behind ``urmx bench guard`` (run by ``.ci/run``, < 60 s).
 
 :func:`measure` times `urmx.kernel.run` on the benchmark wall under El Centro x 0.5 and
-takes its largest relative peak error against the scipy reference; :func:`verdict` fails
-when the error exceeds `MAX_ERROR` or the time is `SLOWDOWN` times the figure stored for
-this machine class in ``benchmarks/baseline.toml``. To guard more, add a figure to what
-:func:`measure` returns and its check to :func:`verdict`. The benchmark suite
-(``benchmarks/`` of the checkout) measures with the same helpers.
+takes its largest relative peak error against the scipy reference; it also times, in
+fresh processes, the cold first analysis (an empty numba cache: the compile a new install
+pays) and the warm one (the cache loaded from disk). :func:`verdict` fails when the error
+exceeds `MAX_ERROR`, the time is `SLOWDOWN` times the figure stored for this machine class
+in ``benchmarks/baseline.toml``, or a start-up time is `START_SLOWDOWN` times its figure.
+To guard more, add a figure to what :func:`measure` returns and its check to
+:func:`verdict`. The benchmark suite (``benchmarks/`` of the checkout) measures with the
+same helpers.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 SLOWDOWN = 3.0  # fail when the kernel is this much slower than the stored figure
+START_SLOWDOWN = 2.0  # ... or its cold compile or warm start this much slower
 MAX_ERROR = 1e-9  # ... or its relative peak error against the reference exceeds this
 REFERENCE_RTOL = 1e-11
 BASELINE = Path("benchmarks") / "baseline.toml"  # in the source checkout
@@ -148,9 +152,43 @@ def write_baseline(path: Path, cls: str, entry: dict) -> None:
     path.write_text("\n".join(lines), encoding="utf-8")
 
 
+_START = r"""
+import sys, time
+t0 = time.perf_counter()
+import numpy as np
+from urmx import kernel
+from urmx.guard import benchmark_wall
+t = np.arange(501) * 0.01
+ag = 3.0 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-t)
+t1 = time.perf_counter()
+kernel.run(benchmark_wall(), ag, 0.01)
+t2 = time.perf_counter()
+print(t2 - t1, t2 - t0)
+"""
+
+
+def start_up(cold: bool) -> dict:
+    """Time a first analysis in a fresh Python process: ``cold`` with an empty numba cache
+    (it compiles the kernel), else with the installed cache (it loads it). Returns the
+    first analysis's time and the whole process's, import included [s]."""
+    import tempfile
+
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as tmp:
+        if cold:
+            env["NUMBA_CACHE_DIR"] = tmp
+        proc = subprocess.run([sys.executable, "-c", _START], capture_output=True, text=True,
+                              env=env, timeout=1800)
+    if proc.returncode != 0:
+        raise RuntimeError(f"the start-up measurement failed: {proc.stderr.strip()[-500:]}")
+    first, total = (float(x) for x in proc.stdout.split()[-2:])
+    return {"first_analysis": first, "process": total}
+
+
 def measure(quick: bool = False) -> dict:
     """The guard's measurement: warm median time [s] of the kernel on the benchmark wall
-    under El Centro x 0.5 and its max relative peak error against the reference."""
+    under El Centro x 0.5, its max relative peak error against the reference, and the cold
+    (compile) and warm (cache load) first analyses of fresh processes."""
     from . import kernel, reference
 
     wall = benchmark_wall()
@@ -162,10 +200,13 @@ def measure(quick: bool = False) -> dict:
                     min_time=0.3 if quick else 2.0)
     ref = reference.run(wall, ag, dt, scale=sf, rtol=REFERENCE_RTOL)
     err = rel_error(res, ref)
+    cold = start_up(cold=True)
+    warm = start_up(cold=False)
     return {"machine_class": machine_class(), "seconds": t["median"], "first_call": first,
             "repeats": t["repeats"], "events": res["events"],
             "reference_events": ref["events"], "error": err["max"], "worst": err["worst"],
-            "samples": int(ag.size)}
+            "samples": int(ag.size), "compile_seconds": cold["first_analysis"],
+            "warm_start_seconds": warm["process"]}
 
 
 def verdict(measured: dict, baseline: dict | None) -> tuple[bool, list[str]]:
@@ -187,6 +228,18 @@ def verdict(measured: dict, baseline: dict | None) -> tuple[bool, list[str]]:
             msgs.append(f"FAIL: {line} (> {SLOWDOWN:g}x slower)")
         else:
             msgs.append(f"ok: {line} (limit {SLOWDOWN:g}x)")
+        for key, what in (("compile_seconds", "cold first analysis (compile)"),
+                          ("warm_start_seconds", "warm start (process and first analysis)")):
+            if key not in baseline or key not in measured:
+                msgs.append(f"no stored figure for the {what}: not judged")
+                continue
+            ratio = measured[key] / baseline[key]
+            line = f"{what} {measured[key]:.2f} s vs stored {baseline[key]:.2f} s: {ratio:.2f}x"
+            if ratio > START_SLOWDOWN:
+                ok = False
+                msgs.append(f"FAIL: {line} (> {START_SLOWDOWN:g}x slower)")
+            else:
+                msgs.append(f"ok: {line} (limit {START_SLOWDOWN:g}x)")
     return ok, msgs
 
 
@@ -201,7 +254,9 @@ def run(update: bool = False, baseline_path: str | os.PathLike | None = None,
     if update:
         load = os.getloadavg()[0] if hasattr(os, "getloadavg") else -1.0
         write_baseline(path, m["machine_class"], {
-            "seconds": m["seconds"], "error": m["error"], "events": m["events"],
+            "seconds": m["seconds"], "compile_seconds": m["compile_seconds"],
+            "warm_start_seconds": m["warm_start_seconds"], "error": m["error"],
+            "events": m["events"],
             "samples": m["samples"], "cpu": cpu_model(), "commit": git_commit(),
             "date": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat(),
             "load_average": round(load, 2)})
@@ -211,7 +266,8 @@ def run(update: bool = False, baseline_path: str | os.PathLike | None = None,
     echo(f"urmx bench guard [{m['machine_class']}]: kernel {1e3 * m['seconds']:.3f} ms per "
          f"analysis ({1 / m['seconds']:.0f} /s, {m['events']} events, median of "
          f"{m['repeats']}; first call {m['first_call']:.2f} s), error vs reference rtol "
-         f"{REFERENCE_RTOL:g} {m['error']:.3g} ({m['worst']})")
+         f"{REFERENCE_RTOL:g} {m['error']:.3g} ({m['worst']}); cold first analysis "
+         f"{m['compile_seconds']:.1f} s, warm start {m['warm_start_seconds']:.2f} s")
     for line in msgs:
         echo("  " + line)
     if update:

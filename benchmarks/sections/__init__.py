@@ -23,12 +23,13 @@ from . import (
     hard_cases,
     kernel,
     paper,
+    startup,
     statuses,
     work_precision,
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility, statuses]
+            fragility, statuses, startup]
 
 #: names on the command line that run several sections
 GROUPS = {

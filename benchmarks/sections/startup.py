@@ -1,0 +1,181 @@
+"""Start-up cost against an earlier kernel, side by side in one run: the cold first
+analysis (an empty numba cache in a fresh process: the compile a new install pays), the
+warm ``urmx simulate`` of the README (the cache loaded from disk, imports included), and
+the steady state of the benchmark analysis. The earlier kernel is checked out from the
+repository's history into a temporary worktree (`BASELINE_COMMIT`), so both are measured
+on the same machine at the same time: absolute times differ between machines (an AMD and
+an Intel host here differ by 1.8x on the same code), ratios much less."""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from urmx.config import project_root
+from urmx.markdown import table
+
+IN_ALL = False
+BASELINE_COMMIT = "0615fbe"  # the kernel before the held joints and the start-up work
+TARGETS = {"cold": 0.25, "simulate": 0.40, "steady": 0.95, "reference": 5000.0}
+SIMULATE = ["simulate", "catalog/examples/benchmark-wall.toml", "elcentro", "--scale", "0.5"]
+
+_COLD = r"""
+import sys, time, json
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from urmx import kernel, Wall
+ag = np.loadtxt(sys.argv[2]).ravel() / 100.0
+w = Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0, top_mass=20000.0,
+         top_stiffness=815e3, top_damping=0.12, pmr=75.0)
+t0, c0 = time.perf_counter(), time.process_time()
+kernel.run(w, ag, 0.02, scale=0.5)
+print(json.dumps({"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0}))
+"""
+
+_STEADY = r"""
+import sys, time, json
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from urmx import kernel, Wall
+ag = np.loadtxt(sys.argv[2]).ravel() / 100.0
+w = Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0, top_mass=20000.0,
+         top_stiffness=815e3, top_damping=0.12, pmr=75.0)
+kernel.run(w, ag, 0.02, scale=0.5)
+ts = []
+for _ in range(int(sys.argv[3])):
+    t = time.perf_counter()
+    kernel.run(w, ag, 0.02, scale=0.5)
+    ts.append(time.perf_counter() - t)
+ts.sort()
+print(json.dumps({"min": ts[0], "median": ts[len(ts) // 2]}))
+"""
+
+_CLI = ("import sys; sys.path.insert(0, sys.argv.pop(1)); from urmx.cli import main; "
+        "sys.exit(main())")
+
+
+def _worktree(commit: str, where: Path) -> Path:
+    subprocess.run(["git", "worktree", "add", "--detach", str(where), commit], check=True,
+                   cwd=project_root(), capture_output=True)
+    return where
+
+
+def _json(args: list[str], env: dict | None = None) -> dict:
+    out = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
+                         timeout=3600)
+    if out.returncode:
+        raise RuntimeError(out.stderr[-800:])
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def run(quick: bool, echo=print) -> dict:
+    from urmx import kernel, reference
+    from urmx.guard import benchmark_wall, load_record, median_time
+
+    root = project_root()
+    record = str(Path(os.environ.get("URMX_RECORDS", "")) / "elcentro1940"
+                 / "elcentro_S00E_1940.dat")
+    rounds = 1 if quick else 2
+    tmp = Path(tempfile.mkdtemp(prefix="urmx-startup-"))
+    base = _worktree(BASELINE_COMMIT, tmp / "baseline")
+    trees = {"now": root, "baseline": base}
+    res: dict = {k: {"cold": [], "simulate": [], "steady": []} for k in trees}
+    try:
+        for _ in range(rounds):  # cold first analysis, alternating
+            for name, tree in trees.items():
+                with tempfile.TemporaryDirectory() as cache:
+                    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+                    res[name]["cold"].append(_json(["-c", _COLD, str(tree), record], env))
+                echo(f"startup: cold {name} {res[name]['cold'][-1]}")
+        for tree in trees.values():  # fill each tree's own cache before the warm runs
+            subprocess.run([sys.executable, "-c", _CLI, str(tree), *SIMULATE], cwd=tree,
+                           capture_output=True, timeout=3600)
+        for _ in range(3 if quick else 7):  # warm `urmx simulate`, alternating
+            for name, tree in trees.items():
+                t = time.perf_counter()
+                out = subprocess.run([sys.executable, "-c", _CLI, str(tree), *SIMULATE],
+                                     cwd=tree, capture_output=True, text=True, timeout=600)
+                res[name]["simulate"].append(time.perf_counter() - t)
+                if out.returncode:
+                    raise RuntimeError(out.stderr[-800:])
+        for _ in range(rounds + 1):  # steady state, alternating processes
+            for name, tree in trees.items():
+                res[name]["steady"].append(
+                    _json(["-c", _STEADY, str(tree), record, "60" if quick else "300"]))
+    finally:
+        subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=root,
+                       capture_output=True)
+    wall = benchmark_wall()
+    ag, dt, sf = load_record("elcentro")
+    k = median_time(lambda: kernel.run(wall, ag, dt, scale=sf), repeat=5, min_time=1.0)
+    r = median_time(lambda: reference.run(wall, ag, dt, scale=sf, rtol=1e-8), repeat=1)
+    now, old = res["now"], res["baseline"]
+    out = {
+        "baseline_commit": BASELINE_COMMIT, "rounds": rounds, "raw": res,
+        "cold": {"now": min(x["wall"] for x in now["cold"]),
+                 "baseline": min(x["wall"] for x in old["cold"])},
+        "simulate": {"now": statistics.median(now["simulate"]),
+                     "baseline": statistics.median(old["simulate"])},
+        "steady": {"now": min(x["min"] for x in now["steady"]),
+                   "baseline": min(x["min"] for x in old["steady"]),
+                   "now_median": statistics.median(x["median"] for x in now["steady"]),
+                   "baseline_median": statistics.median(x["median"] for x in old["steady"])},
+        "reference": {"kernel": k["median"], "reference": r["median"],
+                      "speedup": r["median"] / k["median"]},
+    }
+    out["ratios"] = {
+        "cold": out["cold"]["now"] / out["cold"]["baseline"],
+        "simulate": out["simulate"]["now"] / out["simulate"]["baseline"],
+        "steady": out["steady"]["baseline"] / out["steady"]["now"],
+        "steady_median": out["steady"]["baseline_median"] / out["steady"]["now_median"],
+    }
+    echo(f"startup: ratios {out['ratios']}, reference {out['reference']['speedup']:.0f}x")
+    return out
+
+
+def targets(d: dict) -> list[list[str]]:
+    r = d["ratios"]
+    return [
+        ["cold first analysis <= 0.25 of the kernel at " + d["baseline_commit"],
+         f"{r['cold']:.3f}", "met" if r["cold"] <= TARGETS["cold"] else "missed"],
+        ["warm `urmx simulate` <= 0.40 of the kernel at " + d["baseline_commit"],
+         f"{r['simulate']:.3f}", "met" if r["simulate"] <= TARGETS["simulate"] else "missed"],
+        ["steady state >= 0.95 of the kernel at " + d["baseline_commit"] + " (speed ratio)",
+         f"{r['steady']:.3f}", "met" if r["steady"] >= TARGETS["steady"] else "missed"],
+        ["steady state >= 5000x the reference at rtol 1e-8",
+         f"{d['reference']['speedup']:.0f}x",
+         "met" if d["reference"]["speedup"] >= TARGETS["reference"] else "missed"],
+    ]
+
+
+def render(d: dict) -> list[str]:
+    c, s, t, ref = d["cold"], d["simulate"], d["steady"], d["reference"]
+    rows = [
+        ["cold first analysis (empty numba cache, fresh process) [s]", f"{c['now']:.1f}",
+         f"{c['baseline']:.1f}", f"{d['ratios']['cold']:.3f}"],
+        ["warm `urmx " + " ".join(SIMULATE) + "` [s]", f"{s['now']:.2f}",
+         f"{s['baseline']:.2f}", f"{d['ratios']['simulate']:.3f}"],
+        ["benchmark analysis, steady state, min [ms]", f"{1e3 * t['now']:.3f}",
+         f"{1e3 * t['baseline']:.3f}", f"{d['ratios']['steady']:.3f} (speed)"],
+        ["benchmark analysis, steady state, median [ms]", f"{1e3 * t['now_median']:.3f}",
+         f"{1e3 * t['baseline_median']:.3f}", f"{d['ratios']['steady_median']:.3f} (speed)"],
+    ]
+    return [
+        f"Measured side by side in one run against the kernel at commit "
+        f"`{d['baseline_commit']}` (checked out into a temporary worktree): cold first "
+        f"analyses alternating ({d['rounds']} each, the minimum), warm `urmx simulate` "
+        f"alternating (median), steady state in alternating fresh processes (minimum and "
+        f"median of 300 analyses each).",
+        "",
+        *table(["", "now", d["baseline_commit"], "ratio"], rows),
+        "",
+        f"The benchmark analysis takes {1e3 * ref['kernel']:.3f} ms against "
+        f"{ref['reference']:.2f} s for the scipy reference at rtol 1e-8: "
+        f"{ref['speedup']:.0f}x.",
+    ]

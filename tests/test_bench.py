@@ -29,7 +29,8 @@ PERFORMANCE = project_root() / "reports" / "performance.md"
 def _measured(**kw):
     m = {"machine_class": "x86_64-2cpu", "seconds": 0.001, "error": 1e-12,
          "worst": "peak_lower_drift", "events": 590, "reference_events": 590,
-         "samples": 2688, "repeats": 5, "first_call": 0.1}
+         "samples": 2688, "repeats": 5, "first_call": 0.1, "compile_seconds": 20.0,
+         "warm_start_seconds": 0.8}
     m.update(kw)
     return m
 
@@ -92,6 +93,16 @@ def test_guard_verdict_logic():
     ok, msgs = guard.verdict(_measured(error=math.nan), base)  # a NaN error is no pass
     assert not ok and msgs[0].startswith("FAIL")
     ok, msgs = guard.verdict(_measured(seconds=1.0), None)  # unknown class: pass
+    assert ok and any("not judged" in m for m in msgs)
+    # the start-up figures: a cold compile or a warm start over 2x the stored one fails
+    base = {"seconds": 0.001, "compile_seconds": 20.0, "warm_start_seconds": 0.8}
+    ok, msgs = guard.verdict(_measured(compile_seconds=39.0, warm_start_seconds=1.5), base)
+    assert ok and any("1.95x" in m for m in msgs)
+    ok, msgs = guard.verdict(_measured(compile_seconds=41.0), base)
+    assert not ok and any(m.startswith("FAIL: cold first analysis") for m in msgs)
+    ok, msgs = guard.verdict(_measured(warm_start_seconds=1.7), base)
+    assert not ok and any(m.startswith("FAIL: warm start") for m in msgs)
+    ok, msgs = guard.verdict(_measured(), {"seconds": 0.001})  # an older stored entry
     assert ok and any("not judged" in m for m in msgs)
 
 

@@ -5,6 +5,7 @@ import copy
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from urmx import paper as P
 
@@ -228,6 +229,19 @@ def test_table6_like_for_like_column_from_history():
     assert float(tab["peak_lower_drift_family1"].sel(diaphragm="D1")) == pytest.approx(0.022)
     assert np.isnan(float(tab["peak_lower_drift_family1"].sel(diaphragm="D5")))
     assert tab["peak_lower_drift_family1"].attrs["units"] == "m"
+
+
+def test_table6_column2_from_the_kernel():
+    """An archive with the kernel's continuous-time peak_lower_drift_family1 gives Table VI's
+    column (2) from it, not from the histories on the record grid."""
+    single = F.single()
+    fam1 = xr.zeros_like(single["peak_lower_drift"])
+    fam1.loc[{"diaphragm": "D1"}] = 0.0235
+    single["peak_lower_drift_family1"] = fam1
+    tab = P.table6(single)
+    assert tab.attrs["family1_source"].startswith("kernel")
+    assert float(tab["peak_lower_drift_family1"].sel(diaphragm="D1")) == pytest.approx(0.0235)
+    assert float(tab["peak_lower_drift_family1"].sel(diaphragm="D5")) == 0.0
 
 
 def test_significant_frequency_is_the_manifests():

@@ -315,7 +315,8 @@ def stability_table(ds: xr.Dataset, height: float, diaphragms: Sequence[str], re
     """Stability of the segments of one wall (``height`` high) with several diaphragms under
     one record (the columns of the paper's Table VI).
 
-    Columns: (2) ``peak_lower_drift`` (crack height relative to the base), (3)
+    Columns: (2) ``peak_lower_drift`` (crack height relative to the base) and, where the
+    archive has it, ``peak_lower_drift_family1`` (the same while in patterns 11/12), (3)
     ``peak_upper_drift`` (differential top - crack), (4)-(5) ``instability_displacement_
     upper``/``_lower``, (6)-(8) ``instability_ratio_upper``/``_lower``/``instability_ratio``
     (the kernel's continuous-time ratios, MODEL.md section 10), plus
@@ -330,6 +331,8 @@ def stability_table(ds: xr.Dataset, height: float, diaphragms: Sequence[str], re
     names = ["peak_lower_drift", "peak_upper_drift", "instability_ratio_upper",
              "instability_ratio_lower", "instability_ratio", "unfavourable_fraction"]
     _require(ds, names, "Table VI")
+    if "peak_lower_drift_family1" in ds:  # archives written by the kernel that outputs it
+        names.append("peak_lower_drift_family1")
     ds = valid_cells(ds)
     wall = nearest_wall(ds, height)
     ids = [match_id(ds, "diaphragm", d) for d in diaphragms]

@@ -113,10 +113,15 @@ G_OPEN_FACTOR = 1e-6
 NP = 3
 # rows over the coordinates y of the quantities the kernel watches
 ROW_T1, ROW_T2, ROW_UB, ROW_UC, ROW_UT, ROW_GC = range(6)
-# peak trackers (the first N_DISP act on y, the rest on y_dd plus the ground)
-TR_UB, TR_UC, TR_UT, TR_D1, TR_D2, TR_RL, TR_RU, TR_AB, TR_AC, TR_AT = range(10)
-N_TRACK = 10
-N_DISP = 7
+# peak trackers (the first N_DISP act on y, the rest on y_dd plus the ground): u_b, u_c,
+# u_t, the lower drift a1*theta1 while in family 1 (zero row in family 2) and while in
+# family 2, the upper drift a2*theta2, and the three absolute accelerations. The
+# instability ratios are drift peaks over a*theta0 (theta0 of each family's lower case),
+# so the lower ratio, whose theta0 changes with the family, and the drift while in
+# patterns 11/12 both come exactly.
+TR_UB, TR_UC, TR_UT, TR_D1F1, TR_D1F2, TR_D2, TR_AB, TR_AC, TR_AT = range(9)
+N_TRACK = 9
+N_DISP = 6
 # integer state: family, sides, joint states, branches of the lower curve, the upper
 # curve and the lower curve of the other family (held crack joint), held state
 I_FAM, I_S, I_C, I_BOPEN, I_COPEN, I_BL, I_BU, I_BLA, I_H = range(9)
@@ -136,8 +141,8 @@ STATUS = ("ok", "collapsed", "event-limit")
 LAWS = {"scale": 0, "contact": 1}
 # scalar outputs of _march (index order)
 O_COLLAPSE_T, O_FAM1_TIME, O_DURATION, O_BASE_IMP, O_CRACK_IMP, O_EVENTS = range(6)
-O_SUBSTEPS, O_SERIES, O_HOLDS, O_NEED = 6, 7, 8, 9
-N_OUT = 10
+O_SUBSTEPS, O_SERIES, O_HOLDS, O_NEED, O_COLLAPSE_SEG = 6, 7, 8, 9, 10
+N_OUT = 11
 # pieces: held state x family x branches (module docstring); see mode_index
 NPIECE = 312
 REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, constant
@@ -151,7 +156,7 @@ REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, consta
 _FLAGS = dict(_nrt=False, error_model="numpy")
 entry = njit(cache=True, **_FLAGS)
 inner = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, **_FLAGS)
-inline = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline="always",
+inline = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True,
               **_FLAGS)
 
 
@@ -281,7 +286,7 @@ def _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt):
     return k
 
 
-@entry
+@inner
 def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt):
     """The event functions of the current piece, ``e = sig*(rows.y + vrows.y_d +
     agc*xg_dd) + kap`` (an event when e falls through zero); returns how many.
@@ -463,7 +468,7 @@ def _reset_other(ist, which):
         ist[I_S] = -ist[I_C]
 
 
-@entry
+@inner
 def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, ag_now, MK,
                  MC, MR, MG, v_rest, counts, tmp):
     """Carry out one event at the current state (shared by both solvers; padded arrays).
@@ -849,31 +854,15 @@ def _lower_bound(cf, m):
 
 
 @inner
-def _positive_max(cf, m):
-    """For a polynomial starting at or below zero with a positive slope and ending at or
-    below zero: the point of its first maximum if that maximum is positive, else -1."""
-    ns = 16
-    d_prev = _peval(cf, m, 0.0)[1]
-    s_prev = 0.0
-    for i in range(1, ns + 1):
-        s = i / ns
-        d = _peval(cf, m, s)[1]
-        if d_prev > 0.0 and d <= 0.0:
-            a, b = _newton(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s), 1)
-            sm = 0.5 * (a + b)
-            return sm if _peval(cf, m, sm)[0] > 0.0 else -1.0
-        d_prev, s_prev = d, s
-    return -1.0
+def _scan(cf, m, first_max, single_min):
+    """Scans of a polynomial on [0, 1] at 16 points, extrema between them located exactly.
 
-
-@inner
-def _first_nonpositive(cf, m, single_min):
-    """A point s in (0, 1] where the polynomial (positive at 0) is <= 0, at or before
-    its first interior minimum that reaches zero; 2.0 when it stays positive.
-
-    single_min: the Hermite test found one interior minimum; otherwise the interval is
-    scanned at 16 points and every local minimum between them is located exactly."""
-    if single_min:
+    first_max: the polynomial starts at or below zero with a positive slope and ends at or
+    below zero; returns the point of its first maximum if that maximum is positive, else -1.
+    Otherwise the polynomial is positive at 0; returns a point in (0, 1] where it is <= 0,
+    at or before its first interior minimum that reaches zero, 2.0 when it stays positive
+    (single_min: the Hermite test found one interior minimum, located directly)."""
+    if not first_max and single_min:
         a, b = _newton(cf, m, 0.0, 1.0, 1e-14, 0.5, 1)
         s = 0.5 * (a + b)
         return s if _peval(cf, m, s)[0] <= 0.0 else 2.0
@@ -883,15 +872,19 @@ def _first_nonpositive(cf, m, single_min):
     for i in range(1, ns + 1):
         s = i / ns
         p, d, _ = _peval(cf, m, s)
-        if p <= 0.0:
+        if not first_max and p <= 0.0:
             return s
-        if d_prev < 0.0 and d > 0.0:
+        if (first_max and d_prev > 0.0 and d <= 0.0) or \
+                (not first_max and d_prev < 0.0 and d > 0.0):
             a, b = _newton(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s), 1)
             sm = 0.5 * (a + b)
-            if _peval(cf, m, sm)[0] <= 0.0:
+            pm = _peval(cf, m, sm)[0]
+            if first_max:
+                return sm if pm > 0.0 else -1.0
+            if pm <= 0.0:
                 return sm
         d_prev, s_prev = d, s
-    return 2.0
+    return -1.0 if first_max else 2.0
 
 
 @inner
@@ -933,33 +926,47 @@ def _hermite_ext(p0, p1, m0, m1):
 
 @inline
 def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
-    """:func:`_point` over the first nn coordinates (a constant where inlined)."""
-    for i in range(nn):
-        s = -MR[i] - MG[i] * ag
-        for k in range(nn):
-            s -= MK[i, k] * r[k] + MC[i, k] * v[k]
-        acc[i] = s
-    for i in range(nn):
-        s = -MG[i] * beta
-        for k in range(nn):
-            s -= MK[i, k] * v[k] + MC[i, k] * acc[k]
-        jerk[i] = s
-    for t in range(N_DISP):
-        a = 0.0
-        b = 0.0
-        for k in range(nn):
-            a += TR[t, k] * r[k]
-            b += TR[t, k] * v[k]
-        val[t] = a
-        der[t] = b
-    for t in range(N_DISP, N_TRACK):
-        a = 0.0
-        b = 0.0
-        for k in range(nn):
-            a += TR[t, k] * acc[k]
-            b += TR[t, k] * jerk[k]
-        val[t] = a + ag
-        der[t] = b + beta
+    """:func:`_point` over the first nn coordinates (a constant where inlined). The state,
+    accelerations and jerks are held in locals: the compiler cannot know that the output
+    arrays do not alias the inputs and would reload the inputs after every store."""
+    r0, r1, r2 = r[0], r[1], r[2]
+    v0, v1, v2 = v[0], v[1], v[2]
+    a0 = -MR[0] - MG[0] * ag - (MK[0, 0] * r0 + MC[0, 0] * v0) - (MK[0, 1] * r1 + MC[0, 1] * v1)
+    a1 = -MR[1] - MG[1] * ag - (MK[1, 0] * r0 + MC[1, 0] * v0) - (MK[1, 1] * r1 + MC[1, 1] * v1)
+    a2 = 0.0
+    if nn > 2:
+        a0 -= MK[0, 2] * r2 + MC[0, 2] * v2
+        a1 -= MK[1, 2] * r2 + MC[1, 2] * v2
+        a2 = -MR[2] - MG[2] * ag - (MK[2, 0] * r0 + MC[2, 0] * v0) \
+            - (MK[2, 1] * r1 + MC[2, 1] * v1) - (MK[2, 2] * r2 + MC[2, 2] * v2)
+    j0 = -MG[0] * beta - (MK[0, 0] * v0 + MC[0, 0] * a0) - (MK[0, 1] * v1 + MC[0, 1] * a1)
+    j1 = -MG[1] * beta - (MK[1, 0] * v0 + MC[1, 0] * a0) - (MK[1, 1] * v1 + MC[1, 1] * a1)
+    j2 = 0.0
+    if nn > 2:
+        j0 -= MK[0, 2] * v2 + MC[0, 2] * a2
+        j1 -= MK[1, 2] * v2 + MC[1, 2] * a2
+        j2 = -MG[2] * beta - (MK[2, 0] * v0 + MC[2, 0] * a0) \
+            - (MK[2, 1] * v1 + MC[2, 1] * a1) - (MK[2, 2] * v2 + MC[2, 2] * a2)
+    acc[0] = a0
+    acc[1] = a1
+    acc[2] = a2
+    jerk[0] = j0
+    jerk[1] = j1
+    jerk[2] = j2
+    for t in range(N_TRACK):
+        p0, p1, p2 = (r0, r1, r2) if t < N_DISP else (a0, a1, a2)
+        q0, q1, q2 = (v0, v1, v2) if t < N_DISP else (j0, j1, j2)
+        a = TR[t, 0] * p0 + TR[t, 1] * p1
+        b = TR[t, 0] * q0 + TR[t, 1] * q1
+        if nn > 2:
+            a += TR[t, 2] * p2
+            b += TR[t, 2] * q2
+        if t < N_DISP:
+            val[t] = a
+            der[t] = b
+        else:
+            val[t] = a + ag
+            der[t] = b + beta
 
 
 @inline
@@ -980,15 +987,25 @@ def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
 
 @inline
 def _propagate_n(E, PV, r, v, a0, beta, rb, vb, nn):
+    r0, r1, r2 = r[0], r[1], r[2]
+    v0, v1, v2 = v[0], v[1], v[2]
     for i in range(nn):
         s1 = PV[0, i] + a0 * PV[1, i] + beta * PV[2, i]
         s2 = PV[0, NP + i] + a0 * PV[1, NP + i] + beta * PV[2, NP + i]
-        for k in range(nn):
-            s1 += E[i, k] * r[k]
-            s2 += E[NP + i, k] * r[k]
-        for k in range(nn):
-            s1 += E[i, NP + k] * v[k]
-            s2 += E[NP + i, NP + k] * v[k]
+        s1 += E[i, 0] * r0
+        s1 += E[i, 1] * r1
+        s2 += E[NP + i, 0] * r0
+        s2 += E[NP + i, 1] * r1
+        if nn > 2:
+            s1 += E[i, 2] * r2
+            s2 += E[NP + i, 2] * r2
+        s1 += E[i, NP] * v0
+        s1 += E[i, NP + 1] * v1
+        s2 += E[NP + i, NP] * v0
+        s2 += E[NP + i, NP + 1] * v1
+        if nn > 2:
+            s1 += E[i, NP + 2] * v2
+            s2 += E[NP + i, NP + 2] * v2
         rb[i] = s1
         vb[i] = s2
 
@@ -1025,12 +1042,14 @@ def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
 
 @inline
 def _events_at_n(RT, KP, r, v, e, ed, nn):
+    r0, r1, r2 = r[0], r[1], r[2]
+    v0, v1, v2 = v[0], v[1], v[2]
     for k in range(MAX_EV):
-        a = RT[0, k] * r[0]
-        b = RT[0, k] * v[0]
-        for i in range(1, nn):
-            a += RT[i, k] * r[i]
-            b += RT[i, k] * v[i]
+        a = RT[0, k] * r0 + RT[1, k] * r1
+        b = RT[0, k] * v0 + RT[1, k] * v1
+        if nn > 2:
+            a += RT[2, k] * r2
+            b += RT[2, k] * v2
         e[k] = a + KP[k]
         ed[k] = b
 
@@ -1110,7 +1129,7 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
     return m_taylor
 
 
-@entry
+@inner
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
     """One row of the histories: tilts, displacements, accelerations, pattern and the
     support-reduced coordinates r = N y and their rates."""
@@ -1150,6 +1169,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     nsteps = N - 1 + ntail
     g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
     v_rest = g_open / dt
+    inv_dt = 1.0 / dt  # a product per step instead of a division (its latency showed)
     # start: at rest, family 2, provisional sides against the first ground motion
     first = 0.0
     for k in range(N):
@@ -1207,7 +1227,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     for step in range(nsteps):
         if step < N - 1:
             alpha = ag[step]
-            beta = (ag[step + 1] - ag[step]) / dt
+            beta = (ag[step + 1] - ag[step]) * inv_dt
         else:
             alpha = 0.0
             beta = 0.0
@@ -1285,14 +1305,14 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 s_lo = 0.0
                 s_hi = 1.0
                 if rebound:
-                    s_lo = _positive_max(cf, mc)
+                    s_lo = _scan(cf, mc, True, False)
                     if s_lo < 0.0 or s_lo >= s_ev:
                         continue
                 if dip:
                     if opening and _lower_bound(cf, mc) > 0.0:
                         continue  # e(s) >= c0 - sum|c_j| > 0 on [0, 1]: no crossing
                     # the exact first point where e <= 0 on the sub-step, if any
-                    s_hi = _first_nonpositive(cf, mc, ed_a[k] < 0.0 and not opening)
+                    s_hi = _scan(cf, mc, False, ed_a[k] < 0.0 and not opening)
                     if s_hi > 1.0:
                         continue
                 if s_hi > s_ev:
@@ -1359,11 +1379,8 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                                     v_rest, counts, tmp)
                 if n_events <= evlog.shape[0]:  # the pattern after the event
                     evlog[n_events - 1, 3] = ist[I_FAM] * 10 + (1 if ist[I_S] > 0 else 2)
-                if code == 1:
-                    peaks[TR_RL] = 1.0
-                elif code == 2:
-                    peaks[TR_RU] = 1.0
                 if code != 0:
+                    outs[O_COLLAPSE_SEG] = code  # 1: lower, 2: upper segment
                     status = ST_COLLAPSED
                     break
                 # new piece
@@ -1381,11 +1398,11 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
                 MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], \
                     vecs[mid, 1], prop[mid], pvec[mid]
-                _point_fast(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a,
-                            sacc, sjerk, n)
+                _point_n(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a,
+                         sacc, sjerk, NP)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
-                _events_at(RT, KP, r, v, e_a, ed_a, n)
+                _events_at_n(RT, KP, r, v, e_a, ed_a, NP)
                 if rel:
                     _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, alpha + beta * tau, beta, e_a,
                                 ed_a)
@@ -1419,9 +1436,6 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
             a_grid = ag[step + 1] if step + 1 < N else 0.0
             _point(MK, MC, MR, MG, TR, r, v, a_grid, 0.0, val_b, der_b, sacc, sjerk)
             record_row(hist, step + 1, L, GN[h], ist, r, v, val_b, nfull)
-    if status == ST_COLLAPSED:
-        peaks[TR_RL] = min(peaks[TR_RL], 1.0)
-        peaks[TR_RU] = min(peaks[TR_RU], 1.0)
     outs[O_FAM1_TIME] = fam1_time
     outs[O_DURATION] = duration
     outs[O_BASE_IMP] = counts[0]
@@ -1431,6 +1445,14 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     outs[O_SUBSTEPS] = n_sub
     outs[O_SERIES] = n_series
     return status
+
+
+# The event semantics as the scipy reference solver calls them from Python: the same
+# functions compiled with Python wrappers (and cached), only when the reference is used;
+# the kernel calls the wrapper-less ones above.
+active_events_py = entry(active_events.py_func)
+handle_event_py = entry(handle_event.py_func)
+record_row_py = entry(record_row.py_func)
 
 
 # ---- tables (numpy): held-state geometry and piece modes ---------------------------------
@@ -1460,12 +1482,11 @@ def _theta0(P: np.ndarray, case: int) -> float:
 
 
 def tracker_rows(P: np.ndarray, L: np.ndarray, fam: int) -> np.ndarray:
-    """Rows of the ten peak trackers; the lower instability ratio depends on the family."""
-    a1, a2 = P[P_A1], P[P_A2]
-    th0l = _theta0(P, 3 if fam == 1 else 2)
-    th01 = _theta0(P, 1)
-    return np.array([L[ROW_UB], L[ROW_UC], L[ROW_UT], a1 * L[ROW_T1], a2 * L[ROW_T2],
-                     L[ROW_T1] / th0l, L[ROW_T2] / th01, L[ROW_UB], L[ROW_UC], L[ROW_UT]])
+    """Rows of the nine peak trackers in a family (the lower drift by its family)."""
+    d1, d2 = P[P_A1] * L[ROW_T1], P[P_A2] * L[ROW_T2]
+    zero = np.zeros_like(d1)
+    return np.array([L[ROW_UB], L[ROW_UC], L[ROW_UT], d1 if fam == 1 else zero,
+                     zero if fam == 1 else d1, d2, L[ROW_UB], L[ROW_UC], L[ROW_UT]])
 
 
 def geometry(P: np.ndarray) -> tuple:
@@ -1812,23 +1833,33 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
     return ag * scale, dt, ntail, LAWS[impact]
 
 
-def scalars(peaks, outs, status):
-    """The result dict of one analysis (shared by both solvers)."""
+def scalars(peaks, outs, status, P):
+    """The result dict of one analysis (shared by both solvers): tracker peaks scaled to
+    drifts and instability ratios (a ratio is 1.0 at a collapse of its segment)."""
     pk = peaks.tolist()  # Python floats in one call (this runs once per analysis)
     out = outs.tolist()
     duration = out[O_DURATION]
+    a1, a2 = float(P[P_A1]), float(P[P_A2])
+    d1_f1, d1_f2 = pk[TR_D1F1], pk[TR_D1F2]
+    lower = max(d1_f1 / (a1 * _theta0(P, 3)), d1_f2 / (a1 * _theta0(P, 2)))
+    upper = pk[TR_D2] / (a2 * _theta0(P, 1))
+    if status == ST_COLLAPSED:
+        seg = int(out[O_COLLAPSE_SEG])
+        lower = 1.0 if seg == 1 else min(lower, 1.0)
+        upper = 1.0 if seg == 2 else min(upper, 1.0)
     res = {
         "peak_crack_displacement": pk[TR_UC],
         "peak_top_displacement": pk[TR_UT],
         "peak_base_displacement": pk[TR_UB],
-        "peak_lower_drift": pk[TR_D1],
+        "peak_lower_drift": max(d1_f1, d1_f2),
         "peak_upper_drift": pk[TR_D2],
         "peak_top_acceleration": pk[TR_AT],
         "peak_crack_acceleration": pk[TR_AC],
         "peak_base_acceleration": pk[TR_AB],
-        "instability_ratio_lower": pk[TR_RL],
-        "instability_ratio_upper": pk[TR_RU],
-        "instability_ratio": max(pk[TR_RL], pk[TR_RU]),
+        "instability_ratio_lower": lower,
+        "instability_ratio_upper": upper,
+        "instability_ratio": max(lower, upper),
+        "peak_lower_drift_family1": d1_f1,
         "collapsed": int(status == ST_COLLAPSED),
         "collapse_time": out[O_COLLAPSE_T],
         "unfavourable_fraction": out[O_FAM1_TIME] / duration if duration > 0 else 0.0,
@@ -1906,7 +1937,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
             hist[:] = np.nan
     if started is not None:
         sys.stderr.write(f"urmx: kernel compiled in {time.perf_counter() - started:.1f} s\n")
-    res = scalars(peaks, outs, status)
+    res = scalars(peaks, outs, status, tab.P)
     if history:
         res["history"] = history_dict(hist, dt, n)
     if max_log:

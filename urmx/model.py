@@ -217,14 +217,15 @@ def _pack(w: Wall) -> np.ndarray:
 # the kernel's entry points, which alone are cached on disk (urmx.jitcache); the matrices
 # of the pieces are built once per wall in numpy (they are not in any loop).
 _compiled = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+_inlined = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True)
 
-@_compiled
+@_inlined
 def lower_case(family):
     """Segment case of the lower segment: Case 3 in family 1, Case 2 in family 2."""
     return 3 if family == 1 else 2
 
 
-@_compiled
+@_inlined
 def curve(P, case):
     """(M0, theta0, Mi, theta_a, theta_b) of a segment case."""
     i = P_CASE + 5 * (case - 1)

@@ -396,7 +396,8 @@ def table6(single: xr.Dataset, paper: Paper | None = None, record: str | None = 
     """Table VI from a single-storey archive: :func:`urmx.analysis.stability_table` for the
     paper's wall, record and COR, with the like-for-like column (2) for walls that rock in
     patterns 11/12: ``peak_lower_drift_family1``, the peak lower-segment drift while in
-    those patterns, read from the stored history (NaN without one, or never in them).
+    those patterns: the kernel's continuous-time output where the archive has it, else read
+    from the stored history on the record grid (NaN without one, or never in them).
 
     ``diaphragms`` default: the paper's D5, the pinned top (when in the study) and D1.
     """
@@ -406,6 +407,9 @@ def table6(single: xr.Dataset, paper: Paper | None = None, record: str | None = 
         ids = [str(d) for d in single["diaphragm"].values]
         diaphragms = [d for d in (paper.stiff, paper.pinned, "D1") if d in ids]
     tab = A.stability_table(single, paper.height, diaphragms, record, cor=paper.cor)
+    if "peak_lower_drift_family1" in tab:  # the kernel's continuous-time peak
+        tab.attrs["family1_source"] = "kernel (continuous time)"
+        return tab
     fam1 = np.full(tab.sizes["diaphragm"], np.nan)
     try:
         hist = A.displacement_histories(single, paper.height, list(tab["diaphragm"].values),

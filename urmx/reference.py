@@ -7,7 +7,8 @@ found by ``solve_ivp``'s event location, and the state at an event is obtained b
 fresh integration *to* the event time, not from the interpolant. Interior extrema of
 the peak outputs are events too (their rates crossing zero). What an event does is
 decided by the same functions as in the exact kernel (:func:`urmx.kernel.handle_event`,
-:func:`urmx.kernel.active_events`), on the same piece matrices
+:func:`urmx.kernel.active_events`, compiled with Python wrappers as ``*_py``), on the same
+piece matrices
 (:func:`urmx.kernel.tables`), so the two solvers differ only in how they integrate.
 """
 
@@ -104,6 +105,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     peaks = np.zeros(K.N_TRACK)
     status = K.ST_OK
     collapse_time = np.nan
+    collapse_segment = 0
     fam1 = 0.0
     events = 0
     log = []
@@ -134,7 +136,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     def record(k, r, v, a):
         n, mid, mode, padded, TR, L = piece()
         val, _ = tracker_values(mode, TR, r, v, a, 0.0)
-        K.record_row(hist, k, L, GN[ist[K.I_H]], ist, _pad(r), _pad(v), val, nfull)
+        K.record_row_py(hist, k, L, GN[ist[K.I_H]], ist, _pad(r), _pad(v), val, nfull)
 
     def event_values(ne, n, r, v, a, b, mode):
         MK, MC, MR, MG = mode
@@ -160,7 +162,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         while tau < dt and status == K.ST_OK:
             n, mid, mode, padded, TR, L = piece()
             MK, MC, MR, MG = mode
-            ne = K.active_events(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig, kap,
+            ne = K.active_events_py(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig, kap,
                                  kind, tgt)
             rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
             evfuns = [_event(rows[k, :n].copy(), vrows[k, :n].copy(), agc[k], sig[k], kap[k],
@@ -217,12 +219,12 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                     status = K.ST_EVENT_LIMIT
                     break
                 rp, vp = _pad(r), _pad(v)
-                code = K.handle_event(P, GL, GX, GMI, GROT, ist, kind[k_ev], tgt[k_ev], rp, vp,
+                code = K.handle_event_py(P, GL, GX, GMI, GROT, ist, kind[k_ev], tgt[k_ev], rp, vp,
                                       float(cor), law, float(window), alpha + beta * tau,
                                       *padded, v_rest, counts, tmp)
                 log[-1] = (*log[-1], ist[K.I_FAM] * 10 + (1 if ist[K.I_S] > 0 else 2))
                 if code:
-                    peaks[K.TR_RL if code == 1 else K.TR_RU] = 1.0
+                    collapse_segment = code
                     status = K.ST_COLLAPSED
                     collapse_time = t0 + tau
                     break
@@ -230,7 +232,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 r, v = rp[:n].copy(), vp[:n].copy()
                 val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
                 bump(val)
-                ne = K.active_events(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig,
+                ne = K.active_events_py(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig,
                                      kap, kind, tgt)
                 e, ed = event_values(ne, n, r, v, alpha + beta * tau, beta, mode)
                 release = (kind[:ne] == K.EV_BASE_RELEASE) | (kind[:ne] == K.EV_CRACK_RELEASE)
@@ -246,16 +248,14 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
             np.maximum(peaks[K.N_DISP:], np.abs(val[K.N_DISP:]), out=peaks[K.N_DISP:])
         if history:
             record(step + 1, r, v, ag[step + 1] if step + 1 < N else 0.0)
-    if status == K.ST_COLLAPSED:
-        peaks[K.TR_RL] = min(peaks[K.TR_RL], 1.0)
-        peaks[K.TR_RU] = min(peaks[K.TR_RU], 1.0)
     outs = np.zeros(K.N_OUT)
+    outs[K.O_COLLAPSE_SEG] = collapse_segment
     outs[K.O_COLLAPSE_T] = collapse_time
     outs[K.O_FAM1_TIME] = fam1
     outs[K.O_DURATION] = duration
     outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP], outs[K.O_HOLDS] = counts
     outs[K.O_EVENTS] = events
-    res = K.scalars(peaks, outs, status)
+    res = K.scalars(peaks, outs, status, P)
     if history:
         res["history"] = K.history_dict(hist, dt, nfull)
     res["event_log"] = np.array([row + (0,) * (4 - len(row)) for row in log]).reshape(-1, 4)

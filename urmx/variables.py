@@ -16,8 +16,8 @@ SCALARS = (
     "peak_crack_displacement", "peak_top_displacement", "peak_base_displacement",
     "peak_lower_drift", "peak_upper_drift", "peak_top_acceleration",
     "peak_crack_acceleration", "peak_base_acceleration", "instability_ratio_lower",
-    "instability_ratio_upper", "instability_ratio", "collapsed", "collapse_time",
-    "unfavourable_fraction", "base_impacts", "crack_impacts",
+    "instability_ratio_upper", "instability_ratio", "peak_lower_drift_family1", "collapsed",
+    "collapse_time", "unfavourable_fraction", "base_impacts", "crack_impacts",
 )
 INTEGER_SCALARS = ("collapsed", "base_impacts", "crack_impacts")
 #: outputs of study cells that hold whole numbers or flags (a grid's integer scalars; an IDA

@@ -72,6 +72,7 @@ import numpy as np
 from numba import njit
 
 from . import jitcache
+from .errors import InputError
 from .model import (
     HELD_BASE,
     HELD_BOTH,
@@ -1789,46 +1790,46 @@ def clear_cache() -> None:
 def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window=WINDOW):
     """Validate the arguments shared by every solver; returns (ag, dt, ntail, law)."""
     if not isinstance(wall, Wall):
-        raise ValueError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
+        raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
     try:
         dt = float(dt)
     except (TypeError, ValueError):
-        raise ValueError(f"dt={dt!r} must be a number of seconds") from None
+        raise InputError(f"dt={dt!r} must be a number of seconds") from None
     if not (math.isfinite(dt) and dt > 0.0):
-        raise ValueError(f"dt={dt!r} must be a positive, finite time step in seconds")
+        raise InputError(f"dt={dt!r} must be a positive, finite time step in seconds")
     ag = np.asarray(ground_acceleration, dtype=float)
     if ag.ndim != 1 or ag.size < 2:
-        raise ValueError(f"ground_acceleration must be a 1-D array of at least 2 samples "
+        raise InputError(f"ground_acceleration must be a 1-D array of at least 2 samples "
                          f"(got shape {ag.shape})")
     if not np.isfinite(ag).all():
         bad = ~np.isfinite(ag)
         i = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"ground_acceleration has {int(bad.sum())} NaN/inf sample(s), the "
+        raise InputError(f"ground_acceleration has {int(bad.sum())} NaN/inf sample(s), the "
                          f"first at index {i} (t = {i * dt:g} s)")
     try:
         scale = float(scale)
     except (TypeError, ValueError):
-        raise ValueError(f"scale={scale!r} must be a number") from None
+        raise InputError(f"scale={scale!r} must be a number") from None
     if not math.isfinite(scale):
-        raise ValueError(f"scale={scale!r} must be finite")
+        raise InputError(f"scale={scale!r} must be finite")
     try:
         cor = float(cor)
     except (TypeError, ValueError):
-        raise ValueError(f"cor={cor!r} must be a number in (0, 1]") from None
+        raise InputError(f"cor={cor!r} must be a number in (0, 1]") from None
     if not (0.0 < cor <= 1.0):
-        raise ValueError(f"cor={cor!r} must lie in (0, 1] (coefficient of restitution)")
+        raise InputError(f"cor={cor!r} must lie in (0, 1] (coefficient of restitution)")
     if impact not in LAWS:
-        raise ValueError(f"impact={impact!r} is not an impact law; use one of "
+        raise InputError(f"impact={impact!r} is not an impact law; use one of "
                          f"{', '.join(map(repr, LAWS))}")
     try:
         tail = float(tail)
     except (TypeError, ValueError):
-        raise ValueError(f"tail={tail!r} must be a duration in seconds") from None
+        raise InputError(f"tail={tail!r} must be a duration in seconds") from None
     if not (math.isfinite(tail) and tail >= 0.0):
-        raise ValueError(f"tail={tail!r} must be a non-negative duration in seconds")
+        raise InputError(f"tail={tail!r} must be a non-negative duration in seconds")
     window = float(window)
     if not (math.isfinite(window) and 0.0 < window < dt):
-        raise ValueError(f"window={window!r} must lie in (0, dt)")
+        raise InputError(f"window={window!r} must lie in (0, dt)")
     ntail = int(round(tail / dt))
     return ag * scale, dt, ntail, LAWS[impact]
 

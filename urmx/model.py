@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from . import jitcache  # noqa: F401  (the cache locator, before any @njit below)
+from .errors import InputError
 
 G = 9.81  # m/s2, the value the paper's Table III uses (MODEL.md section 1)
 RIGID = "rigid"
@@ -95,33 +96,37 @@ class Wall:
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating,
                                                                    np.integer)):
                 hint = ' (a number or "rigid")' if allow_rigid else " (a number)"
-                raise ValueError(f"Wall {name}={value!r} is not valid{hint}")
+                raise InputError(f"Wall {name}={value!r} is not valid{hint}")
             value = float(value)
             if not math.isfinite(value):
-                raise ValueError(f"Wall {name}={value!r} must be a finite number")
+                raise InputError(f"Wall {name}={value!r} must be a finite number")
             if positive and value <= 0.0:
-                raise ValueError(f"Wall {name}={value!r} must be greater than zero")
+                raise InputError(f"Wall {name}={value!r} must be greater than zero")
             if not positive and value < 0.0:
-                raise ValueError(f"Wall {name}={value!r} must not be negative")
+                raise InputError(f"Wall {name}={value!r} must not be negative")
             object.__setattr__(self, name, value)
 
         for name in ("thickness", "height", "mass"):
             number(name, positive=True)
         for name in ("bottom_mass", "top_mass", "bottom_damping", "top_damping"):
             number(name)
+        for name in ("bottom_damping", "top_damping"):
+            if getattr(self, name) > 1.0:
+                raise InputError(f"Wall {name}={getattr(self, name)!r} is a damping ratio above 1 "
+                                 f"(overdamped): give it as a ratio, e.g. 0.12 for 12 %")
         for name in ("bottom_stiffness", "top_stiffness"):
             number(name, positive=True, allow_rigid=True)
         number("crack_ratio", positive=True)
         if not 0.0 < self.crack_ratio < 1.0:
-            raise ValueError(f"Wall crack_ratio={self.crack_ratio!r} must lie in (0, 1)")
+            raise InputError(f"Wall crack_ratio={self.crack_ratio!r} must lie in (0, 1)")
         number("pmr", positive=True)
         if not 0.0 < self.pmr <= 100.0:
-            raise ValueError(f"Wall pmr={self.pmr!r} must lie in (0, 100] (percent)")
+            raise InputError(f"Wall pmr={self.pmr!r} must lie in (0, 100] (percent)")
         number("kappa", positive=True)
         limit = 1.0 - 0.009 * self.pmr
         # relative margin: 1 - 0.009*pmr is not exact in binary (pmr 75 gives 0.325 + 1 ulp)
         if self.kappa >= limit * (1.0 - 1e-12):
-            raise ValueError(
+            raise InputError(
                 f"Wall kappa={self.kappa!r} puts theta_a at or beyond theta_b "
                 f"(with pmr={self.pmr:g} kappa must be below 1 - 0.009*pmr = {limit:.4g})"
             )
@@ -159,7 +164,7 @@ class Wall:
         """Trilinear data of segment case 1 (upper), 2 (lower, family 2) or 3 (lower,
         family 1), MODEL.md section 3 / the paper's Tables I and III."""
         if case not in (1, 2, 3):
-            raise ValueError(f"segment case must be 1, 2 or 3, not {case!r}")
+            raise InputError(f"segment case must be 1, 2 or 3, not {case!r}")
         i = P_CASE + 5 * (case - 1)
         return Segment(*(float(v) for v in self._params[i : i + 5]))
 

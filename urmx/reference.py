@@ -18,6 +18,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from . import kernel as K
+from .errors import InputError
 
 
 def _rhs(MK, MC, MR, MG, alpha, beta, n):
@@ -76,7 +77,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     ag, dt, ntail, law = K.check_inputs(wall, ground_acceleration, dt, scale, cor, impact,
                                         tail, window)
     if not (rtol and 0.0 < float(rtol) < 1.0):
-        raise ValueError(f"rtol={rtol!r} must lie in (0, 1)")
+        raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
     tab = K.tables(wall, dt)
     P = tab.P
     GL, GN, GX, GMI, GROT, GNN, GTR = tab.geo

@@ -32,21 +32,23 @@ def register(subparsers) -> None:
     p.set_defaults(handler=_run)
 
 
-def _trace(arg: str, dt: float | None, unit: str | None, records_dir):
-    """The record as an ObsPy Trace in m s-2: a file, or else a manifest id."""
+def _record(arg: str, dt: float | None, unit: str | None, records_dir):
+    """The record's checked samples (`urmx.records.readers.Samples`, m s-2): a file, or else
+    a manifest id. Read without ObsPy (only ObsPy's own file formats import it)."""
     from pathlib import Path
 
     from urmx.errors import InputError, MissingFileError
-    from urmx.records import load, manifest, read
+    from urmx.records import load_samples, manifest
+    from urmx.records.readers import read_samples
 
     path = Path(arg)
     if path.is_file():
-        stream = read(path, dt=dt, unit=unit)
-        if len(stream) != 1:
-            ids = ", ".join(tr.id for tr in stream)
-            raise InputError(f"record file {arg!r} holds {len(stream)} channels ({ids}); "
+        chans = read_samples(path, dt=dt, unit=unit)
+        if len(chans) != 1:
+            ids = ", ".join(f"{c.network}.{c.station}..{c.channel}" for c in chans)
+            raise InputError(f"record file {arg!r} holds {len(chans)} channels ({ids}); "
                              f"give a file with one channel")
-        return stream[0]
+        return chans[0]
     try:
         ids = manifest(records_dir)
     except MissingFileError:
@@ -58,42 +60,55 @@ def _trace(arg: str, dt: float | None, unit: str | None, records_dir):
     if dt is not None or unit is not None:
         raise InputError(f"--dt and --unit apply to record files; {arg!r} is a manifest "
                          f"record that states its own")
-    return load(arg, records_dir)
+    return load_samples(arg, records_dir)
 
 
-def _table(ds) -> str:
-    from urmx.variables import INTEGER_SCALARS, SCALARS
+def _table(values: dict) -> str:
+    from urmx.variables import INTEGER_SCALARS, SCALARS, attrs
 
     width = max(map(len, SCALARS))
     lines = []
     for name in SCALARS:
-        value = ds[name].item()
-        text = f"{value:d}" if name in INTEGER_SCALARS else f"{value:.6g}"
-        lines.append(f"  {name:<{width}s}  {text:>12s}  {ds[name].attrs['units']}")
+        value = values[name]
+        text = f"{int(value):d}" if name in INTEGER_SCALARS else f"{value:.6g}"
+        lines.append(f"  {name:<{width}s}  {text:>12s}  {attrs(name)['units']}")
     return "\n".join(lines)
 
 
 def _run(args) -> int:
+    """One analysis. Without --out or --plot the solver is called directly and nothing of
+    xarray, dask or matplotlib is imported (a second or so less per command)."""
     from urmx.catalog import read_wall
     from urmx.errors import check_output, writing
-    from urmx.netcdf import write_netcdf
-    from urmx.simulation import simulate
 
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:
             check_output(path, option)
     wall = read_wall(args.wall)
-    trace = _trace(args.record, args.dt, args.unit, args.records)
-    history = bool(args.out or args.plot)
-    ds = simulate(wall, trace, scale=args.scale, cor=args.cor, impact=args.impact,
-                  tail=args.tail, history=history, method=args.method)
-    a = ds.attrs
-    print(f"wall {args.wall}  record {args.record} (dt {a['dt']:g} s, {trace.stats.npts} "
-          f"points)  scale {a['scale']:g}  cor {a['cor']:g}  impact {a['impact']}  "
-          f"method {a['method']}")
-    print(f"status {a['status']}  analysed {a['duration']:.6g} s  events {a['events']}")
-    print(_table(ds))
+    rec = _record(args.record, args.dt, args.unit, args.records)
+    kw = dict(scale=args.scale, cor=args.cor, impact=args.impact, tail=args.tail)
+    if args.out or args.plot:
+        from urmx.simulation import simulate
+
+        ds = simulate(wall, rec.trace(), history=True, method=args.method, **kw)
+        values = {name: ds[name].item() for name in ds.data_vars if ds[name].ndim == 0}
+        values.update(ds.attrs)
+    else:
+        if args.method == "reference":
+            from urmx.reference import run
+        else:
+            from urmx.kernel import run
+        values = run(wall, rec.data, rec.dt, **kw)
+        values.update(dt=rec.dt, method=args.method, **kw)
+    print(f"wall {args.wall}  record {args.record} (dt {values['dt']:g} s, {rec.data.size} "
+          f"points)  scale {values['scale']:g}  cor {values['cor']:g}  impact "
+          f"{values['impact']}  method {values['method']}")
+    print(f"status {values['status']}  analysed {values['duration']:.6g} s  events "
+          f"{values['events']}")
+    print(_table(values))
     if args.out:
+        from urmx.netcdf import write_netcdf
+
         print(f"wrote {write_netcdf(ds, args.out)}")
     if args.plot:
         from urmx.plot import plot_simulation

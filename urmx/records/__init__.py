@@ -21,7 +21,7 @@ from .errors import (
     UnknownFormatError,
     UnsupportedRecordError,
 )
-from .manifest import load, manifest
+from .manifest import load, load_samples, manifest
 from .measures import (
     arias_history,
     fourier_spectrum,
@@ -36,7 +36,8 @@ from .processing import bandpass, baseline, process, resample, scale, taper
 from .readers import FORMATS, STANDARD_GRAVITY, UNIT_FACTORS, detect_format, read
 
 __all__ = [
-    "read", "detect_format", "load", "manifest", "measures", "response_spectrum",
+    "read", "detect_format", "load", "load_samples", "manifest", "measures",
+    "response_spectrum",
     "fourier_spectrum", "significant_frequency_range", "significant_duration",
     "predominant_frequency", "arias_history", "sdof_displacement",
     "baseline", "taper", "bandpass", "resample", "scale", "process",

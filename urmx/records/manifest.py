@@ -123,7 +123,17 @@ def load(record_id: str, records_dir: str | os.PathLike | None = None):
     ChecksumError
         The file's SHA-256 differs from the manifest.
     """
-    from .readers import read
+    s = load_samples(record_id, records_dir)
+    tr = s.trace()
+    tr.stats.processing.append(f"urmx.records.load: {record_id!r}, sha256 verified")
+    return tr
+
+
+def load_samples(record_id: str, records_dir: str | os.PathLike | None = None):
+    """:func:`load` without ObsPy: the record as :class:`urmx.records.readers.Samples`
+    (``data`` in m s-2, ``dt``, ``record`` with the manifest entry's id, set, scale_factor,
+    paper_scale_factor and sha256). Same checks and errors as :func:`load`."""
+    from .readers import read_samples
 
     base = _records_dir(records_dir)
     e = entry(record_id, base)
@@ -137,15 +147,14 @@ def load(record_id: str, records_dir: str | os.PathLike | None = None):
                             f"the manifest's {e['sha256'][:12]}...; the file is not the one "
                             f"from {e['source']}")
     carries = e["format"] != "columns"  # formats with headers state dt and unit themselves
-    st = read(path, format=e["format"], dt=None if carries else e["dt"],
-              unit=None if carries else e["unit"])
+    chans = read_samples(path, format=e["format"], dt=None if carries else e["dt"],
+                         unit=None if carries else e["unit"])
     if "channel" in e:
-        st = st.select(channel=e["channel"])
-    if len(st) != 1:
+        chans = [c for c in chans if c.channel == e["channel"]]
+    if len(chans) != 1:
         raise ManifestError(path, f"record {record_id!r}: expected one channel, found "
-                            f"{len(st)}; set `channel` in the manifest")
-    tr = st[0]
-    tr.stats.record.update({k: e.get(k) for k in ("id", "set", "scale_factor",
-                                                  "paper_scale_factor", "sha256")})
-    tr.stats.processing.append(f"urmx.records.load: {record_id!r}, sha256 verified")
-    return tr
+                            f"{len(chans)}; set `channel` in the manifest")
+    s = chans[0]
+    s.record.update({k: e.get(k) for k in ("id", "set", "scale_factor",
+                                           "paper_scale_factor", "sha256")})
+    return s

@@ -8,14 +8,17 @@ variable registry (``urmx/variables.toml``).
 from __future__ import annotations
 
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
-import xarray as xr
 
 from ..errors import InputError
 from ..variables import attrs, stamp
 from .readers import STANDARD_GRAVITY
+
+if TYPE_CHECKING:  # xarray is imported where a result is built: reading a record stays light
+    import xarray as xr
 
 #: default periods of the response spectrum [s]
 DEFAULT_PERIODS = np.unique(np.concatenate([np.geomspace(0.02, 10.0, 120), [0.05, 0.1, 0.2,
@@ -140,6 +143,8 @@ def fourier_spectrum(trace, frequencies=None, bandwidth: float = 40.0) -> xr.Dat
     xarray.DataArray
         ``fourier_amplitude(frequency)`` [m s-1].
     """
+    import xarray as xr
+
     acc, dt = _series(trace)
     freq, amp = _fas(acc, dt)
     centres = np.asarray(DEFAULT_FREQUENCIES if frequencies is None else frequencies, float)
@@ -296,6 +301,8 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
         ``sd`` [m], ``psv`` [m s-1], ``psa`` [m s-2] and ``sa`` (absolute acceleration)
         [m s-2] on dimension ``period`` [s].
     """
+    import xarray as xr
+
     damping = _check_damping(damping)
     acc, dt = _series(as_trace(trace))
     periods = np.asarray(DEFAULT_PERIODS if periods is None else periods, dtype=float)
@@ -390,6 +397,8 @@ def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Datas
         ``predominant_frequency`` [Hz], ``duration`` [s], ``dt`` [s]; each with
         ``units`` and ``long_name``; with `periods`, also ``psa(period)`` [m s-2].
     """
+    import xarray as xr
+
     trace = as_trace(trace)
     acc, dt = _series(trace)
     if names is None:

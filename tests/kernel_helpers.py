@@ -15,7 +15,7 @@ import urmx
 
 from .fixtures.records import record_file, records_folder
 
-G = 9.81
+G = urmx.model.PAPER_G
 
 SCALAR_PEAKS = (
     "peak_crack_displacement", "peak_top_displacement", "peak_base_displacement",

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from urmx import Wall
-from urmx.model import G, full_mass, system, transform
+from urmx.model import PAPER_G, full_mass, system, transform
 
 # ---- the paper's Table II walls (nominal masses, MODEL.md section 2) ------------------
 TABLE_II = {
@@ -124,7 +124,7 @@ def test_segment_formulas_by_hand():
         assert s.Mi == pytest.approx(0.009 * 75 * s.M0, rel=1e-14)
         assert s.theta_a == pytest.approx(0.04 * s.theta0, rel=1e-14)
         assert s.theta_b == pytest.approx(s.theta0 * (1 - 0.675), rel=1e-14)
-    assert G == 9.81
+    assert PAPER_G == 9.81
     with pytest.raises(ValueError, match="segment case"):
         wall.segment(4)
 

@@ -33,7 +33,7 @@ from typing import Any
 
 from .config import project_root
 from .errors import MissingFileError, UrmxError
-from .model import RIGID, G, Wall
+from .model import PAPER_G, RIGID, Wall
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -209,7 +209,7 @@ class Building:
     @property
     def diaphragm_mass(self) -> float:
         """Effective diaphragm mass, Eq. 7: 8/15 of its seismic weight over g. [kg]"""
-        return EFFECTIVE_MASS * self.diaphragm_weight * 1e3 * self.plan_area / G
+        return EFFECTIVE_MASS * self.diaphragm_weight * 1e3 * self.plan_area / PAPER_G
 
     def replace(self, **changes: Any) -> Building:
         d = dict(plan=self.plan, density=self.density, wall_length=self.wall_length,

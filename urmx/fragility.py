@@ -80,7 +80,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .model import RIGID, G, Wall
+from .model import PAPER_G, RIGID, Wall
 
 IMS = ("pga", "pgv", "sa_wall", "sa_diaphragm", "scale")
 #: units and long name of each intensity measure
@@ -95,8 +95,8 @@ IM_ATTRS = {
 DAMPING = 0.05  # of the spectral intensity measures [1]
 DESIGN_FRACTION = 0.6  # effective period at this fraction of the instability rotation
 #: default max_intensity per intensity measure, in its units
-MAX_INTENSITY = {"pga": 5.0 * G, "pgv": 5.0, "sa_wall": 5.0 * G, "sa_diaphragm": 5.0 * G,
-                 "scale": 50.0}
+MAX_INTENSITY = {"pga": 5.0 * PAPER_G, "pgv": 5.0, "sa_wall": 5.0 * PAPER_G,
+                 "sa_diaphragm": 5.0 * PAPER_G, "scale": 50.0}
 STEP = 1.05  # default ratio of the hunt's geometric grid
 MAX_STRIDE = 3.0  # longest hunt stride (whole grid steps)
 RATIO_TARGET = 0.5  # a stride aims at this instability ratio

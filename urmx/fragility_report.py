@@ -32,7 +32,7 @@ from .analysis import spearman
 from .errors import InputError, MissingFileError
 from .markdown import number as _fmt
 from .markdown import table
-from .model import G
+from .model import PAPER_G
 
 GROUPS = {"top": "single storey (diaphragm on top, ground below)",
           "both": "higher storey (between two diaphragms alike)"}
@@ -63,7 +63,7 @@ def open_ida(archive) -> xr.Dataset:
 def _in_g(ds: xr.Dataset) -> tuple[float, str]:
     """Factor and unit label to show the study's intensity measure in."""
     units = ds.collapse_intensity.attrs.get("units", "")
-    return (1.0 / G, "g") if units == "m s-2" else (1.0, units)
+    return (1.0 / PAPER_G, "g") if units == "m s-2" else (1.0, units)
 
 
 def _groups(ds: xr.Dataset) -> dict[str, list[str]]:

@@ -22,7 +22,8 @@ from numba import njit
 from . import jitcache  # noqa: F401  (the cache locator, before any @njit below)
 from .errors import InputError
 
-G = 9.81  # m/s2, the value the paper's Table III uses (MODEL.md section 1)
+PAPER_G = 9.81  # m s-2, the paper's gravity (Table III; MODEL.md section 1); not standard
+# gravity (urmx.records.STANDARD_GRAVITY = 9.80665, for records given in g)
 RIGID = "rigid"
 
 # ---- layout of the parameter vector ------------------------------------------------
@@ -202,13 +203,13 @@ def _pack(w: Wall) -> np.ndarray:
     # dashpots beside the springs (MODEL.md section 5)
     cb = 0.0 if rb else 2.0 * w.bottom_damping * math.sqrt(kdb * (mdb + 0.5 * w.mass))
     ct = 0.0 if rt else 2.0 * w.top_damping * math.sqrt(kdt * (mdt + 0.5 * w.mass))
-    p[:P_CASE] = (b, h, a1, a2, m1, m2, mdb, mdt, kdb, kdt, cb, ct, G, float(rb), float(rt),
+    p[:P_CASE] = (b, h, a1, a2, m1, m2, mdb, mdt, kdb, kdt, cb, ct, PAPER_G, float(rb), float(rt),
                   w.kappa, w.pmr)
     # Table I, specific forms (MODEL.md section 3)
     cases = (
-        ((0.5 * m2 + 0.5 * mdt) * b * G, b / (2 * a2) * (m2 + mdt) / (0.5 * m2 + mdt)),
-        ((0.5 * m1 + m2 + mdt) * b * G, b / a1),
-        (0.5 * m1 * b * G, b / (2 * a1) * m1 / (0.5 * m1 + m2 + mdt)),
+        ((0.5 * m2 + 0.5 * mdt) * b * PAPER_G, b / (2 * a2) * (m2 + mdt) / (0.5 * m2 + mdt)),
+        ((0.5 * m1 + m2 + mdt) * b * PAPER_G, b / a1),
+        (0.5 * m1 * b * PAPER_G, b / (2 * a1) * m1 / (0.5 * m1 + m2 + mdt)),
     )
     for k, (M0, theta0) in enumerate(cases):
         Mi = 0.009 * w.pmr * M0

@@ -17,10 +17,10 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .errors import InputError
+from .model import PAPER_G
 
 PANEL = (5.0, 3.6)  # inches per panel
-G = 9.81  # m s-2 per g, the value the paper uses
-DISPLAY_UNITS = {"m": ("mm", 1e3), "m s-2": ("g", 1.0 / G)}  # SI -> what engineers compare
+DISPLAY_UNITS = {"m": ("mm", 1e3), "m s-2": ("g", 1.0 / PAPER_G)}  # SI -> what engineers compare
 
 
 def in_display_units(obj):

@@ -111,7 +111,7 @@ def _section(lines: list[str], title: str, body) -> None:
 
 
 def _in_g(value) -> str:
-    return _fmt(float(value) / P.G, 3)
+    return _fmt(float(value) / P.PAPER_G, 3)
 
 
 def _record_titles(ds: xr.Dataset, paper) -> dict[str, str]:
@@ -122,7 +122,7 @@ def _record_titles(ds: xr.Dataset, paper) -> dict[str, str]:
         if "scale_factor" in ds.coords:
             text += f" x {float(ds['scale_factor'].sel(record=r)):.3g}"
         if "scaled_pga" in ds.coords:
-            text += f" (PGA {float(ds['scaled_pga'].sel(record=r)) / P.G:.3g} g)"
+            text += f" (PGA {float(ds['scaled_pga'].sel(record=r)) / P.PAPER_G:.3g} g)"
         out[str(r)] = text
     return out
 
@@ -354,7 +354,7 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
                          f"{float(np.nanmax(rel)):+.0%}",
                          f"{int(spring['collapsed'].sel(record=r).sum())} / "
                          f"{int(pinned['collapsed'].sel(record=r).sum())}",
-                         pair("peak_top_acceleration", 1 / P.G, r),
+                         pair("peak_top_acceleration", 1 / P.PAPER_G, r),
                          pair("peak_crack_displacement", 1e3, r)])
         lines += [f"`{paper.stiff}` (spring, {f:.3g} Hz for the median wall) against "
                   f"`{paper.pinned}` (pinned), COR {paper.cor:g}, over the "

@@ -104,7 +104,7 @@ def run(quick: bool, echo=print) -> dict:
                 res[name]["simulate"].append(time.perf_counter() - t)
                 if out.returncode:
                     raise RuntimeError(out.stderr[-800:])
-        for _ in range(rounds + 1):  # steady state, alternating processes
+        for _ in range(3 if quick else 9):  # steady state, alternating processes
             for name, tree in trees.items():
                 res[name]["steady"].append(
                     _json(["-c", _STEADY, str(tree), record, "60" if quick else "300"]))
@@ -134,6 +134,10 @@ def run(quick: bool, echo=print) -> dict:
         "simulate": out["simulate"]["now"] / out["simulate"]["baseline"],
         "steady": out["steady"]["baseline"] / out["steady"]["now"],
         "steady_median": out["steady"]["baseline_median"] / out["steady"]["now_median"],
+        # each round's pair ran back to back: their ratio cancels the host's slow drifts
+        "steady_rounds": statistics.median(
+            b["median"] / n["median"] for n, b in zip(now["steady"], old["steady"],
+                                                      strict=True)),
     }
     echo(f"startup: ratios {out['ratios']}, reference {out['reference']['speedup']:.0f}x")
     return out
@@ -146,8 +150,11 @@ def targets(d: dict) -> list[list[str]]:
          f"{r['cold']:.3f}", "met" if r["cold"] <= TARGETS["cold"] else "missed"],
         ["warm `urmx simulate` <= 0.40 of the kernel at " + d["baseline_commit"],
          f"{r['simulate']:.3f}", "met" if r["simulate"] <= TARGETS["simulate"] else "missed"],
-        ["steady state >= 0.95 of the kernel at " + d["baseline_commit"] + " (speed ratio)",
-         f"{r['steady']:.3f}", "met" if r["steady"] >= TARGETS["steady"] else "missed"],
+        ["steady state >= 0.95 of the kernel at " + d["baseline_commit"] + " (speed ratio: "
+         "median of per-round ratios; of the minima)",
+         f"{r.get('steady_rounds', r['steady']):.3f}; {r['steady']:.3f}",
+         "met" if min(r.get("steady_rounds", r["steady"]), r["steady"]) >= TARGETS["steady"]
+         else "missed"],
         ["steady state >= 5000x the reference at rtol 1e-8",
          f"{d['reference']['speedup']:.0f}x",
          "met" if d["reference"]["speedup"] >= TARGETS["reference"] else "missed"],
@@ -166,6 +173,10 @@ def render(d: dict) -> list[str]:
         ["benchmark analysis, steady state, median [ms]", f"{1e3 * t['now_median']:.3f}",
          f"{1e3 * t['baseline_median']:.3f}", f"{d['ratios']['steady_median']:.3f} (speed)"],
     ]
+    if "steady_rounds" in d["ratios"]:
+        rows.append(["benchmark analysis, median over rounds of the per-round speed ratio "
+                     "(each round's two processes back to back)", "", "",
+                     f"{d['ratios']['steady_rounds']:.3f} (speed)"])
     return [
         f"Measured side by side in one run against the kernel at commit "
         f"`{d['baseline_commit']}` (checked out into a temporary worktree): cold first "
@@ -178,4 +189,40 @@ def render(d: dict) -> list[str]:
         f"The benchmark analysis takes {1e3 * ref['kernel']:.3f} ms against "
         f"{ref['reference']:.2f} s for the scipy reference at rtol 1e-8: "
         f"{ref['speedup']:.0f}x.",
+        "",
+        *CHOICES,
     ]
+
+
+#: what each compile-time choice bought, measured when it was made (on this machine, cold
+#: first analysis in a fresh process with an empty cache, and the steady state interleaved
+#: with the previous state; the commits say the same)
+CHOICES = [
+    "What each compile-time choice measured when it was taken (this machine; cold first "
+    "analysis in a fresh process with an empty numba cache; steady state interleaved with "
+    "the state before the change):",
+    "",
+    *table(["choice", "cold compile", "steady state", "commit"], [
+        ["piece tables (propagators of every held state x family x branch) built in numpy, "
+         "not in compiled code; the integration loop called directly instead of through a "
+         "wrapper that numba compiled and optimised again", "~90 -> ~25 CPU s",
+         "unchanged (tables 2e-15 from the compiled ones)", "a876cd3"],
+        ["only the entry points cached on disk (their cached code holds their callees)",
+         "less written and loaded", "unchanged", "06cb95f"],
+        ["helpers compiled without Python wrappers (`no_cpython_wrapper`; only compiled "
+         "code calls them)", "-9 %", "unchanged", "998923d"],
+        ["helpers inlined by LLVM (`forceinline`) instead of numba's IR inliner "
+         "(`inline='always'`)", "21 -> 14 s", "same (ratio 1.00-1.03)", "869c7c5"],
+        ["event-site trackers as a call instead of inlined (tried, reverted)", "-",
+         "10 % slower (2 calls per event, 11 array arguments)", "5114605"],
+        ["`NUMBA_OPT` lower, loop vectorisation off, `noalias` hints (tried, not taken)",
+         "no gain", "no gain or slower", "-"],
+    ]),
+    "",
+    "The warm `urmx simulate` is bounded below by what every numba program pays: importing "
+    "numba (0.15-0.3 s here) and numba's refresh of its target context when it loads the "
+    "first function from the cache (0.45-0.65 s, which imports `scipy.linalg.cython_blas` "
+    "through `numba.np.arraymath`), before any urmx code runs. Meeting 40 % of the kernel "
+    "at 0615fbe would need the kernel compiled ahead of time (a C extension built at "
+    "install), which was not done.",
+]

@@ -179,6 +179,18 @@ def test_cli_bad_input_with_records(records_dir, files, capsys, template, needle
         _check_cli(template, needle, files, capsys)
 
 
+def test_paper_without_records_says_so_before_any_study(tmp_path, monkeypatch, capsys):
+    """A records folder named by URMX_RECORDS that is missing stops `urmx paper` at once:
+    the error is the only line (no study started, no cluster)."""
+    monkeypatch.setenv("URMX_RECORDS", str(tmp_path / "nope"))
+    code, err = _cli(["paper", "--out", str(tmp_path / "res"), "--report",
+                      str(tmp_path / "rep")], capsys)
+    assert code == 2
+    assert err.strip().splitlines() == [
+        f"urmx paper: error: records directory '{tmp_path / 'nope'}' (from $URMX_RECORDS) "
+        "does not exist"]
+
+
 def _wall():
     return urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=3000.0)
 

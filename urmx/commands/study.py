@@ -99,6 +99,7 @@ def _run(args) -> int:
 
 
 def _paper(args) -> int:
+    from ..config import records_dir
     from ..errors import check_output, writing
     from ..report import write_report
     from ..study import check_scheduler, close_client, get_client, run_study
@@ -106,6 +107,7 @@ def _paper(args) -> int:
     out = check_output(args.out, "--out", folder=True)
     check_output(args.report, "--report", folder=True)
     check_scheduler(args.scheduler)
+    records_dir(args.records)  # a missing records folder is said before a cluster starts
     start = time.perf_counter()
     archives = []
     client, owned = (None, False)

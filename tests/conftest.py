@@ -1,5 +1,6 @@
 """Shared fixtures: the records folder (a missing folder fails under CI, skips elsewhere),
-the synthetic study Datasets, and factories for walls and study files."""
+the synthetic study Datasets, factories for walls and study files, and in-memory records
+in place of the manifest."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+import urmx
 from urmx.guard import benchmark_wall
 
 from .fixtures import studies
@@ -55,3 +57,24 @@ def make_study(tmp_path):
         return path
 
     return make
+
+
+@pytest.fixture
+def use_records(monkeypatch):
+    """Factory: serve in-memory records in place of the manifest and its loader for this
+    test: ``use_records(acceleration, scale, dt)`` with ``{id: samples [m s-2]}`` and
+    ``{id: scale factor}``."""
+    from obspy import Trace
+
+    def use(acceleration: dict, scale: dict, dt: float) -> None:
+        def manifest(records_dir=None):
+            return {k: {"scale_factor": scale[k], "paper_scale_factor": scale[k]}
+                    for k in acceleration}
+
+        def load(record_id, records_dir=None):
+            return Trace(data=acceleration[record_id].copy(), header={"delta": dt})
+
+        monkeypatch.setattr(urmx.records, "manifest", manifest, raising=False)
+        monkeypatch.setattr(urmx.records, "load", load, raising=False)
+
+    return use

@@ -388,17 +388,8 @@ def threshold(slenderness, record, cor):
 
 
 @pytest.fixture
-def fake_records(monkeypatch):
-    from obspy import Trace
-
-    def manifest(records_dir=None):
-        return {k: {"scale_factor": SCALE[k]} for k in ACC}
-
-    def load(record_id, records_dir=None):
-        return Trace(data=ACC[record_id].copy(), header={"delta": DT})
-
-    monkeypatch.setattr(urmx.records, "manifest", manifest, raising=False)
-    monkeypatch.setattr(urmx.records, "load", load, raising=False)
+def fake_records(use_records):
+    use_records(ACC, SCALE, DT)
     CALLS.clear()
 
 

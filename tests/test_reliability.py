@@ -88,17 +88,8 @@ def ida_kernel(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="sca
 
 
 @pytest.fixture
-def fake_records(monkeypatch):
-    from obspy import Trace
-
-    def manifest(records_dir=None):
-        return {k: {"scale_factor": SCALE[k], "paper_scale_factor": SCALE[k]} for k in ACC}
-
-    def load(record_id, records_dir=None):
-        return Trace(data=ACC[record_id].copy(), header={"delta": DT})
-
-    monkeypatch.setattr(urmx.records, "manifest", manifest, raising=False)
-    monkeypatch.setattr(urmx.records, "load", load, raising=False)
+def fake_records(use_records):
+    use_records(ACC, SCALE, DT)
 
 
 # 2 walls x 2 diaphragms x 2 records x 2 CORs = 16 cells; s18 is not run under "quake"
@@ -116,16 +107,14 @@ pairs = {s08 = ["quake", "shake"], s18 = ["shake"]}
 
 
 @pytest.fixture
-def gaps(tmp_path):
-    path = tmp_path / "gaps.toml"
-    path.write_text(STUDY)
-    return path
+def gaps(make_study):
+    return make_study(STUDY, "gaps.toml")
 
 
-def _run(path, **kw):
+def _run(path, kernel=fake_kernel, **kw):
     kw.setdefault("scheduler", "serial")
     kw.setdefault("progress", False)
-    return st.run_study(path, kernel=fake_kernel, batch_size=2, **kw)
+    return st.run_study(path, kernel=kernel, batch_size=2, **kw)
 
 
 def _same(a: xr.Dataset, b: xr.Dataset) -> None:
@@ -243,16 +232,12 @@ IDA_RUN, IDA_CENSORED = 12, 8
 
 
 @pytest.fixture
-def ida_gaps(tmp_path):
-    path = tmp_path / "ida-gaps.toml"
-    path.write_text(IDA_STUDY)
-    return path
+def ida_gaps(make_study):
+    return make_study(IDA_STUDY, "ida-gaps.toml")
 
 
 def _run_ida(path, **kw):
-    kw.setdefault("scheduler", "serial")
-    kw.setdefault("progress", False)
-    return st.run_study(path, kernel=ida_kernel, batch_size=2, **kw)
+    return _run(path, kernel=ida_kernel, **kw)
 
 
 def _check_ida_reductions(ds: xr.Dataset) -> None:
@@ -422,20 +407,10 @@ cor = [0.8]
 
 
 @pytest.fixture
-def many_records(monkeypatch):
-    from obspy import Trace
-
+def many_records(use_records):
     acc = {rid: np.r_[np.zeros(5), 0.1 * (i + 1), -0.05, np.zeros(43)]
            for i, rid in enumerate(MANY)}
-
-    def manifest(records_dir=None):
-        return {k: {"scale_factor": 1.0, "paper_scale_factor": 1.0} for k in acc}
-
-    def load(record_id, records_dir=None):
-        return Trace(data=acc[record_id].copy(), header={"delta": DT})
-
-    monkeypatch.setattr(urmx.records, "manifest", manifest, raising=False)
-    monkeypatch.setattr(urmx.records, "load", load, raising=False)
+    use_records(acc, dict.fromkeys(acc, 1.0), DT)
 
 
 @pytest.mark.slow

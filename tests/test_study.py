@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import urmx.records
 from urmx import study as st
 from urmx import variables
 from urmx.catalog import CatalogError, load_study
@@ -57,17 +56,8 @@ def fake_kernel(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="sc
 
 
 @pytest.fixture
-def fake_records(monkeypatch):
-    from obspy import Trace
-
-    def manifest(records_dir=None):
-        return {k: {"scale_factor": SCALE[k], "paper_scale_factor": SCALE[k]} for k in ACC}
-
-    def load(record_id, records_dir=None):
-        return Trace(data=ACC[record_id].copy(), header={"delta": DT})
-
-    monkeypatch.setattr(urmx.records, "manifest", manifest, raising=False)
-    monkeypatch.setattr(urmx.records, "load", load, raising=False)
+def fake_records(use_records):
+    use_records(ACC, SCALE, DT)
     CALLS.clear()
 
 

@@ -374,3 +374,19 @@ def test_obspy_formats_and_columns(tmp_path):
     two.write_text("\n".join(f"{0.02 * k} {k}" for k in range(6)))
     even = R.read(two, unit="m/s2")[0]  # an even time column: no warning, dt from it
     assert even.stats.delta == pytest.approx(0.02) and even.data[-1] == 5
+
+
+def test_relative_records_folder_is_made_absolute(tmp_path, monkeypatch):
+    """A relative $URMX_RECORDS (the README's `URMX_RECORDS=../shared/records`) means the
+    caller's working folder; records_dir returns it absolute, so that a worker or notebook
+    kernel started in another folder reads the same one."""
+    from urmx.config import records_dir
+
+    (tmp_path / "shared" / "records").mkdir(parents=True)
+    (tmp_path / "checkout").mkdir()
+    monkeypatch.chdir(tmp_path / "checkout")
+    monkeypatch.setenv("URMX_RECORDS", "../shared/records")
+    found = records_dir()
+    assert found.is_absolute()
+    monkeypatch.chdir(tmp_path)  # elsewhere, the returned path names the same folder
+    assert found.is_dir() and found.resolve() == (tmp_path / "shared" / "records").resolve()

@@ -30,7 +30,8 @@ def project_root() -> Path:
 
 
 def records_dir(records_dir: str | os.PathLike | None = None) -> Path:
-    """The folder the record manifest is resolved against; a clear error if unset."""
+    """The folder the record manifest is resolved against, as an absolute path; a clear
+    error if unset or missing."""
     source = "argument"
     value = records_dir
     if value is None and os.environ.get(ENV):
@@ -50,4 +51,6 @@ def records_dir(records_dir: str | os.PathLike | None = None) -> Path:
     path = Path(value).expanduser()
     if not path.is_dir():
         raise MissingFileError(f"records directory {str(path)!r} (from {source}) does not exist")
-    return path
+    # absolute: a relative $URMX_RECORDS means this process's working folder, also for a
+    # worker or notebook kernel that runs elsewhere
+    return path.absolute()

@@ -1,42 +1,58 @@
-"""numba's on-disk cache for urmx, keyed on the source it compiles, so it cannot go stale.
+"""Compiled code of urmx: made lazily, cached on disk keyed on the source it compiles.
 
-numba keys a cached function on its own file only: a compiled function of ``kernel.py``
-that calls a compiled function of ``model.py`` keeps running the old code from disk after
-``model.py`` changes. Here every compiled urmx function is cached in a folder named by a
-hash of the contents of *all* urmx modules with compiled code (and the numba version), and
-that hash is also the source stamp numba checks: a change in any of them means a new
-folder and a fresh compile, never a stale load. In the package's own ``__pycache__`` the
-folders of earlier sources are removed when a new one is made.
+* **Lazy.** :func:`jit` marks a function for numba without importing numba: numba is
+  imported, and every marked function becomes a numba dispatcher, only when a compiled
+  function is first needed (:func:`materialize`). A process that loads the kernel from its
+  native object (:mod:`urmx.native`) never imports numba at all (about 0.35 s of imports
+  and 0.4 s of numba's own set-up when it loads a cached function).
+* **Never stale.** numba keys a cached function on its own file only: a compiled function
+  of ``kernel.py`` that calls a compiled function of ``model.py`` keeps running the old code
+  from disk after ``model.py`` changes. Here every compiled urmx function (numba's cache
+  and the kernel's native object) is cached in a folder named by a hash of the contents of
+  *all* urmx modules with compiled code (and the numba, llvmlite and Python versions), and
+  that hash is also the source stamp numba checks: a change in any of them means a new
+  folder and a fresh compile, never a stale load. In the package's own ``__pycache__`` the
+  folders of earlier sources are removed when a new one is made.
 
 The folder is ``urmx/__pycache__/numba-<hash>`` when the package folder is writable, else
 ``<user cache>/urmx/numba-<hash>``; with ``NUMBA_CACHE_DIR`` set it is
-``$NUMBA_CACHE_DIR/urmx-numba-<hash>``. This module must be imported before any
-``@njit(cache=True)`` decorator of the package runs (``model`` and ``kernel`` import it first).
+``$NUMBA_CACHE_DIR/urmx-numba-<hash>``.
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import os
 import shutil
 import sys
+import threading
 from pathlib import Path
-
-import numba
-from numba.core import caching, config
 
 HERE = Path(__file__).resolve().parent
 # every urmx module that defines compiled (numba) functions
-COMPILED_MODULES = ("jitcache.py", "model.py", "kernel.py")
+COMPILED_MODULES = ("jitcache.py", "model.py", "kernel.py", "native.py")
+
+
+def _version_stamp(package: str) -> bytes:
+    """The version of an installed package without importing it (importing numba costs
+    0.35 s): its ``_version.py``, else its ``__version__``."""
+    spec = importlib.util.find_spec(package)
+    if spec is not None and spec.origin:
+        path = Path(spec.origin).parent / "_version.py"
+        if path.is_file():
+            return path.read_bytes()
+    return str(getattr(__import__(package), "__version__", "")).encode()
 
 
 def source_hash() -> str:
-    """Hash of the compiled modules' sources, the numba version and the Python version."""
+    """Hash of the compiled modules' sources and the numba, llvmlite and Python versions."""
     h = hashlib.sha256()
     for name in COMPILED_MODULES:
         h.update(name.encode())
         h.update((HERE / name).read_bytes())
-    h.update(numba.__version__.encode())
+    for package in ("numba", "llvmlite"):
+        h.update(_version_stamp(package))
     h.update(sys.version.encode())
     return h.hexdigest()[:16]
 
@@ -46,8 +62,9 @@ PREFIX = "numba-"
 
 
 def _candidates() -> list[Path]:
-    if config.CACHE_DIR:
-        return [Path(config.CACHE_DIR) / f"urmx-{PREFIX}{SOURCE_HASH}"]
+    numba_dir = os.environ.get("NUMBA_CACHE_DIR", "")  # as numba.core.config reads it
+    if numba_dir:
+        return [Path(numba_dir) / f"urmx-{PREFIX}{SOURCE_HASH}"]
     user = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "urmx"
     return [HERE / "__pycache__" / f"{PREFIX}{SOURCE_HASH}", user / f"{PREFIX}{SOURCE_HASH}"]
 
@@ -87,51 +104,144 @@ def cache_dir() -> Path | None:
     return _CACHE_DIR
 
 
-def is_compiled(function_name: str) -> bool:
-    """Whether a compiled function of urmx has an entry in the cache (a first call will
-    load it rather than compile it)."""
-    path = cache_dir()
-    return path is not None and any(path.glob(f"*.{function_name}-*.nbi"))
+def _locator_class():
+    """numba's cache locator for urmx's own compiled functions (numba imported here)."""
+    from numba.core import caching
 
+    class UrmxCacheLocator(caching._CacheLocator):
+        """numba cache locator for urmx's compiled functions (see the module docstring)."""
 
-class UrmxCacheLocator(caching._CacheLocator):
-    """numba cache locator for urmx's own compiled functions (see the module docstring)."""
+        def __init__(self, py_func, py_file):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
 
-    def __init__(self, py_func, py_file):
-        self._py_file = py_file
-        self._lineno = py_func.__code__.co_firstlineno
+        def ensure_cache_path(self):
+            if cache_dir() is None:
+                raise OSError("no writable cache folder for urmx's compiled kernel")
 
-    def ensure_cache_path(self):
-        if cache_dir() is None:
-            raise OSError("no writable cache folder for urmx's compiled kernel")
+        def get_cache_path(self):
+            return str(cache_dir())
 
-    def get_cache_path(self):
-        return str(cache_dir())
+        def get_source_stamp(self):
+            return SOURCE_HASH
 
-    def get_source_stamp(self):
-        return SOURCE_HASH
+        def get_disambiguator(self):
+            return str(self._lineno)
 
-    def get_disambiguator(self):
-        return str(self._lineno)
-
-    @classmethod
-    def from_function(cls, py_func, py_file):
-        try:
-            if Path(py_file).resolve().parent != HERE:
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            try:
+                if Path(py_file).resolve().parent != HERE:
+                    return None
+            except OSError:
                 return None
-        except OSError:
-            return None
-        self = cls(py_func, py_file)
-        try:
-            self.ensure_cache_path()
-        except OSError:
-            return None
-        return self
+            self = cls(py_func, py_file)
+            try:
+                self.ensure_cache_path()
+            except OSError:
+                return None
+            return self
+
+    try:
+        impl = caching.CacheImpl
+    except AttributeError:  # numba before 0.62
+        impl = caching._CacheImpl
+    return UrmxCacheLocator, impl
 
 
-try:
-    _impl = caching.CacheImpl
-except AttributeError:  # numba before 0.62
-    _impl = caching._CacheImpl
-if UrmxCacheLocator not in _impl._locator_classes:
-    _impl._locator_classes.insert(0, UrmxCacheLocator)
+# ---- lazy compilation -------------------------------------------------------------------
+
+class Lazy:
+    """A function marked for numba: its dispatcher (and numba) is made on first use.
+
+    ``py_func`` is the Python function; calling, or asking for any numba attribute, makes
+    every marked function of urmx a dispatcher (:func:`materialize`)."""
+
+    def __init__(self, py_func, options: dict):
+        self.py_func = py_func
+        self.options = options
+        self.dispatcher = None
+        self.__name__ = py_func.__name__
+        self.__qualname__ = py_func.__qualname__
+        self.__doc__ = py_func.__doc__
+        self.__module__ = py_func.__module__
+        self.__wrapped__ = py_func
+
+    def __call__(self, *args, **kwargs):
+        materialize()
+        return self.dispatcher(*args, **kwargs)
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        materialize()
+        return getattr(self.dispatcher, name)
+
+    def __repr__(self) -> str:
+        return f"<urmx.jitcache.Lazy {self.__qualname__} (numba {self.options})>"
+
+
+class Deferred:
+    """A numba object (an intrinsic, say) that ``factory`` makes once numba is imported."""
+
+    def __init__(self, factory):
+        self.factory = factory
+        self.value = None
+
+
+_LAZY: list[Lazy] = []
+_DEFERRED: list[Deferred] = []
+_LOCK = threading.RLock()
+_MATERIALIZED = False
+
+
+def jit(**options):
+    """``numba.njit(**options)`` without importing numba until a compiled function is used."""
+    def decorate(py_func):
+        if _MATERIALIZED:
+            import numba
+            return numba.njit(**options)(py_func)
+        lazy = Lazy(py_func, options)
+        _LAZY.append(lazy)
+        return lazy
+    return decorate
+
+
+def deferred(factory):
+    """A placeholder for ``factory()``, made when numba is imported (:func:`materialize`)."""
+    if _MATERIALIZED:
+        return factory()
+    item = Deferred(factory)
+    _DEFERRED.append(item)
+    return item
+
+
+def materialize() -> None:
+    """Import numba, install urmx's cache locator, make the deferred objects and make
+    every marked function a numba dispatcher, in the module globals of urmx too (numba
+    resolves the functions a compiled function calls through its globals when it compiles
+    it)."""
+    global _MATERIALIZED
+    if _MATERIALIZED:
+        return
+    with _LOCK:
+        if _MATERIALIZED:
+            return
+        import numba
+
+        locator, impl = _locator_class()
+        if not any(c.__name__ == locator.__name__ for c in impl._locator_classes):
+            impl._locator_classes.insert(0, locator)
+        for item in _DEFERRED:
+            item.value = item.factory()
+        for lazy in _LAZY:
+            lazy.dispatcher = numba.njit(**lazy.options)(lazy.py_func)
+        for name, module in list(sys.modules.items()):
+            if module is not None and (name == "urmx" or name.startswith("urmx.")):
+                space = vars(module)
+                for key, value in list(space.items()):
+                    if isinstance(value, Lazy):
+                        space[key] = value.dispatcher
+                    elif isinstance(value, Deferred):
+                        space[key] = value.value
+        _MATERIALIZED = True

@@ -64,14 +64,11 @@ Documented choices (MODEL.md section 4)
 from __future__ import annotations
 
 import math
-import sys
-import time
 from collections import OrderedDict
 
 import numpy as np
-from numba import njit
 
-from . import jitcache
+from . import jitcache, native
 from .errors import InputError
 from .model import (
     HELD_BASE,
@@ -147,18 +144,42 @@ N_OUT = 11
 # pieces: held state x family x branches (module docstring); see mode_index
 NPIECE = 312
 REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, constant
+# the arrays of _march, in the order of its argument block (urmx.native), as (name, dtype,
+# number of dimensions): the wall's parameters, the record, the geometry, piece and work
+# arrays of Tables, and the outputs. _march's views of them are typed from this table and
+# every Tables checks its arrays against it.
+_F, _I, _B = "<f8", "<i8", "|b1"
+ARRAYS = (
+    ("P", _F, 1), ("ag", _F, 1),
+    ("GL", _F, 3), ("GN", _F, 3), ("GX", _F, 4), ("GMI", _F, 4), ("GROT", _F, 2),
+    ("GNN", _I, 1), ("GTR", _F, 4),
+    ("ready", _B, 1), ("nsub", _I, 1), ("mats", _F, 4), ("vecs", _F, 3), ("prop", _F, 3),
+    ("pvec", _F, 3), ("rel", _F, 4),
+    ("D", _F, 2), ("cf", _F, 1), ("ist", _I, 1), ("rows", _F, 2), ("vrows", _F, 2),
+    ("agc", _F, 1), ("sig", _F, 1), ("kap", _F, 1), ("kind", _I, 1), ("tgt", _I, 1),
+    ("e_a", _F, 1), ("ed_a", _F, 1), ("e_b", _F, 1), ("ed_b", _F, 1), ("RT", _F, 2),
+    ("RVT", _F, 2), ("AGT", _F, 1), ("KP", _F, 1), ("OPN", _F, 1), ("val_a", _F, 1),
+    ("der_a", _F, 1), ("val_b", _F, 1), ("der_b", _F, 1), ("r", _F, 1), ("v", _F, 1),
+    ("rb", _F, 1), ("vb", _F, 1), ("sacc", _F, 1), ("sjerk", _F, 1), ("tmp", _F, 1),
+    ("counts", _I, 1),
+    ("peaks", _F, 1), ("outs", _F, 1), ("hist", _F, 2), ("evlog", _F, 2),
+)
+I_SCALARS = len(ARRAYS) * native.SLOT  # ntail, law, want_hist follow the array slots
+_view = jitcache.deferred(lambda: native.view_intrinsic(ARRAYS))
 
-# Compiled functions. The kernel's entry points (called from Python) are cached on disk
-# (urmx.jitcache); the helpers are compiled as part of them (their cached code holds the
-# helpers), with no Python wrapper and no cache of their own: that halves what a cold start
-# compiles and writes. No function allocates (``_nrt=False``: numba's reference counting of
+# Compiled functions (urmx.jitcache: numba is imported only when one is compiled). The
+# integration loop _march is compiled once into a native object that later processes load
+# without numba (urmx.native); the helpers are compiled as part of it, with no Python
+# wrapper and no cache of their own: that halves what a cold start compiles and writes.
+# The reference solver's entry points are cached by numba (urmx.jitcache). No function
+# allocates (``_nrt=False``: numba's reference counting of
 # every array argument cost more than the arithmetic); the kernel guards its own divisions
 # (``error_model="numpy"``: no zero-divisor test before each one).
 _FLAGS = dict(_nrt=False, error_model="numpy")
-entry = njit(cache=True, **_FLAGS)
-inner = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, **_FLAGS)
-inline = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True,
-              **_FLAGS)
+entry = jitcache.jit(cache=True, **_FLAGS)
+inner = jitcache.jit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, **_FLAGS)
+inline = jitcache.jit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True,
+                      forceinline=True, **_FLAGS)
 
 
 # ---- shared event semantics -----------------------------------------------------------
@@ -1148,23 +1169,42 @@ def record_row(hist, k, L, N, ist, r, v, val, nfull):
         hist[k, 9 + nfull + i] = _rowdot(N, i, v)
 
 
-@entry
-def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, hist,
-           want_hist, evlog):
-    """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
+@inner
+def _march(iv, fv):
+    """Integrate one analysis. The arguments are the blocks of :class:`urmx.native.Args`:
+    the arrays of ``ARRAYS`` (by address and shape) and ``ntail``, ``law`` and
+    ``want_hist`` in iv; ``dt``, ``cor`` and ``window`` in fv.
 
-    geo: the held states' watch rows, coordinate maps, inverse masses, rotation masks,
-    sizes and tracker rows (:func:`geometry`); pieces: the piece tables (:class:`Tables`);
-    work: scratch arrays. Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist,
-    hist[k, :] at every grid point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t,
-    pattern, then r, r_d). Returns a status code; ST_NEED_PIECE (with the piece in
-    outs[O_NEED]) when a piece's tables are missing (the caller builds them, runs again).
+    ag: scaled ground acceleration [m/s2] (N samples); geo: the held states' watch rows,
+    coordinate maps, inverse masses, rotation masks, sizes and tracker rows
+    (:func:`geometry`); pieces: the piece tables (:class:`Tables`); work: scratch arrays.
+    Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist, hist[k, :] at every grid point
+    k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t, pattern, then r, r_d). Returns a
+    status code; ST_NEED_PIECE (with the piece in outs[O_NEED]) when a piece's tables are
+    missing (the caller builds them, runs again).
 
-    Compiled without numba's reference counting (``_nrt=False``): it never allocates."""
-    GL, GN, GX, GMI, GROT, GNN, GTR = geo
-    ready, nsub, mats, vecs, prop, pvec, REL = pieces
-    (D, cf, ist, rows, vrows, agc, sig, kap, kind, tgt, e_a, ed_a, e_b, ed_b, RT, RVT, AGT,
-     KP, OPN, val_a, der_a, val_b, der_b, r, v, rb, vb, sacc, sjerk, tmp, counts) = work
+    Compiled without numba's reference counting (``_nrt=False``): it never allocates. It
+    has no Python wrapper: it is compiled once into native code (:mod:`urmx.native`)."""
+    P, ag = _view(iv, 0), _view(iv, 1)
+    GL, GN, GX, GMI, GROT, GNN, GTR = (_view(iv, 2), _view(iv, 3), _view(iv, 4), _view(iv, 5),
+                                       _view(iv, 6), _view(iv, 7), _view(iv, 8))
+    ready, nsub, mats, vecs, prop, pvec, REL = (_view(iv, 9), _view(iv, 10), _view(iv, 11),
+                                                _view(iv, 12), _view(iv, 13), _view(iv, 14),
+                                                _view(iv, 15))
+    D, cf, ist, rows, vrows, agc = (_view(iv, 16), _view(iv, 17), _view(iv, 18),
+                                    _view(iv, 19), _view(iv, 20), _view(iv, 21))
+    sig, kap, kind, tgt, e_a, ed_a = (_view(iv, 22), _view(iv, 23), _view(iv, 24),
+                                      _view(iv, 25), _view(iv, 26), _view(iv, 27))
+    e_b, ed_b, RT, RVT, AGT, KP = (_view(iv, 28), _view(iv, 29), _view(iv, 30),
+                                   _view(iv, 31), _view(iv, 32), _view(iv, 33))
+    OPN, val_a, der_a, val_b, der_b, r = (_view(iv, 34), _view(iv, 35), _view(iv, 36),
+                                          _view(iv, 37), _view(iv, 38), _view(iv, 39))
+    v, rb, vb, sacc, sjerk, tmp = (_view(iv, 40), _view(iv, 41), _view(iv, 42),
+                                   _view(iv, 43), _view(iv, 44), _view(iv, 45))
+    counts, peaks, outs, hist, evlog = (_view(iv, 46), _view(iv, 47), _view(iv, 48),
+                                        _view(iv, 49), _view(iv, 50))
+    ntail, law, want_hist = iv[I_SCALARS], iv[I_SCALARS + 1], iv[I_SCALARS + 2] != 0
+    dt, cor, window = fv[0], fv[1], fv[2]
     nfull = 3 - int(P[P_RIGID_B]) - int(P[P_RIGID_T])
     N = ag.shape[0]
     nsteps = N - 1 + ntail
@@ -1616,6 +1656,10 @@ class Tables:
             np.zeros(N_TRACK), np.zeros(N_TRACK), np.zeros(N_TRACK), np.zeros(N_TRACK),
             np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP), np.zeros(NP),
             np.zeros(NP), np.zeros(NP), np.zeros(3, np.int64))
+        names = [x[0] for x in ARRAYS]
+        fixed = [P, _NO_RECORD, *self.geo, *self.pieces, *self.work, np.zeros(N_TRACK),
+                 np.zeros(N_OUT), _NO_HIST, _NO_LOG]
+        self.args = native.Args(ARRAYS, dict(zip(names, fixed, strict=True)), self.dt)
 
     @property
     def nbytes(self) -> int:
@@ -1755,26 +1799,8 @@ def tables(wall: Wall, dt: float) -> Tables:
     return tab
 
 
-_COMPILED = False
-
-
-def _announce_compile() -> float | None:
-    """On the first analysis of a process, say so when the compiled kernel is not in the
-    cache yet (it then takes a while); returns the start time to report the duration."""
-    global _COMPILED
-    if _COMPILED:
-        return None
-    _COMPILED = True
-    if jitcache.is_compiled("_march"):
-        return None
-    sys.stderr.write("urmx: compiling the kernel (once per install; cached in "
-                     f"{jitcache.cache_dir()}) ...\n")
-    sys.stderr.flush()
-    return time.perf_counter()
-
-
 def warm_up() -> None:
-    """Compile the kernel (or load it from numba's on-disk cache) with a tiny analysis.
+    """Compile the kernel (or load it from the on-disk cache) with a tiny analysis.
 
     Called before local worker processes start, so that they load the compiled kernel
     from the cache instead of each compiling it on the same cores."""
@@ -1876,8 +1902,10 @@ def scalars(peaks, outs, status, P):
     return res
 
 
+# placeholders of the arrays an analysis writes only when asked to
 _NO_HIST = np.full((1, 9 + 2 * NP), np.nan)
 _NO_LOG = np.zeros((0, 4))
+_NO_RECORD = np.zeros(1)  # the record's slot until an analysis writes its own
 
 
 def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: float = 0.8,
@@ -1921,27 +1949,33 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
                                       window)
     tab = tables(wall, dt)
     n = tab.nfull
-    N = ag.size
-    peaks = np.zeros(N_TRACK)
-    outs = np.zeros(N_OUT)
-    # without history or a log the kernel never writes them: shared placeholders
-    hist = np.full((N + ntail, 9 + 2 * n), np.nan) if history else _NO_HIST
-    evlog = np.zeros((max_log, 4)) if max_log else _NO_LOG
-    started = _announce_compile()
-    while True:
-        status = _march(tab.P, ag, dt, ntail, float(cor), law, float(window), tab.geo,
-                        tab.pieces, tab.work, peaks, outs, hist, bool(history), evlog)
-        if status != ST_NEED_PIECE:
-            break
-        tab.build([piece_key(int(outs[O_NEED]))])  # not foreseen as reachable: add, rerun
-        if history:
-            hist[:] = np.nan
-    if started is not None:
-        sys.stderr.write(f"urmx: kernel compiled in {time.perf_counter() - started:.1f} s\n")
-    res = scalars(peaks, outs, status, tab.P)
-    if history:
+    args = tab.args
+    # without history or a log the kernel never writes them (placeholders in the block)
+    hist = np.full((ag.size + ntail, 9 + 2 * n), np.nan) if history else None
+    evlog = np.zeros((max_log, 4)) if max_log else None
+    with args.lock:  # the wall's blocks serve one analysis at a time
+        try:
+            if hist is not None:
+                args.put("hist", hist)
+            if evlog is not None:
+                args.put("evlog", evlog)
+            while True:
+                status = args.run(_march, ag, (ntail, law, int(history)), (cor, window))
+                if status != ST_NEED_PIECE:
+                    break
+                # a piece not foreseen as reachable: add it, run again
+                tab.build([piece_key(int(args["outs"][O_NEED]))])
+                if hist is not None:
+                    hist[:] = np.nan
+            res = scalars(args["peaks"], args["outs"], status, tab.P)
+        finally:
+            if hist is not None:
+                args.put("hist", _NO_HIST)
+            if evlog is not None:
+                args.put("evlog", _NO_LOG)
+    if hist is not None:
         res["history"] = history_dict(hist, dt, n)
-    if max_log:
+    if evlog is not None:
         res["event_log"] = evlog[:min(max_log, res["events"])]
     return res
 

@@ -17,10 +17,9 @@ from dataclasses import asdict, dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
 
-from . import jitcache  # noqa: F401  (the cache locator, before any @njit below)
 from .errors import InputError
+from .jitcache import jit
 
 PAPER_G = 9.81  # m s-2, the paper's gravity (Table III; MODEL.md section 1); not standard
 # gravity (urmx.records.STANDARD_GRAVITY = 9.80665, for records given in g)
@@ -222,8 +221,8 @@ def _pack(w: Wall) -> np.ndarray:
 # The few functions the integration loop calls at events are compiled (numba) as part of
 # the kernel's entry points, which alone are cached on disk (urmx.jitcache); the matrices
 # of the pieces are built once per wall in numpy (they are not in any loop).
-_compiled = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
-_inlined = njit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True)
+_compiled = jit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+_inlined = jit(cache=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=True)
 
 @_inlined
 def lower_case(family):

@@ -10,10 +10,10 @@ from __future__ import annotations
 from functools import cached_property
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 
 from ..errors import InputError
+from ..jitcache import jit
 from ..variables import attrs, stamp
 from .readers import STANDARD_GRAVITY
 
@@ -236,7 +236,7 @@ def nigam_jennings_coefficients(omega, damping, dt):
     return np.array([a, b, cc, d, a1, b1, c1, d1])
 
 
-@numba.njit(cache=True)
+@jit(cache=True)  # numba is imported on first use
 def _nj_run(p, coef, omega, damping, keep_history):
     n_per = coef.shape[1]
     u = np.zeros(n_per)

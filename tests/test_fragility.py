@@ -639,7 +639,7 @@ im = "pga"
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert n >= 2, err.decode()
-    assert proc.returncode == 130 and b"interrupted" in err
+    assert proc.returncode == 130 and b"interrupted" in err, (proc.returncode, err.decode())
     assert not out.exists()
     kept = len(list((tmp_path / "run.nc.parts").glob("*.npz")))
     assert 2 <= kept < 60

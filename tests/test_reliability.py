@@ -710,7 +710,10 @@ def test_ctrl_c_gives_one_line(tmp_path):
         if parts.is_dir() and len(list(parts.glob("*.npz"))) >= 3:
             break
         time.sleep(0.05)
-    assert proc.poll() is None, "the run ended before it could be interrupted"
+    if proc.poll() is not None:
+        _, err = proc.communicate()
+        raise AssertionError(f"the run ended before it could be interrupted "
+                             f"(exit {proc.returncode}): {err.decode()[-2000:]}")
     os.killpg(proc.pid, signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     err = err.decode()

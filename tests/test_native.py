@@ -1,0 +1,117 @@
+"""The kernel's loop as a native object (urmx.native): compiled once, then loaded by later
+processes without numba, with the same results; a damaged object is never run."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import urmx
+from urmx import kernel, native
+
+SCRIPT = r"""
+import json, sys
+import numpy as np
+import urmx
+from urmx import kernel
+wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                 top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
+t = np.arange(1501) * 0.01
+ag = 3.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t / 4.0)
+res = kernel.run(wall, ag, 0.01, max_log=50)
+res["event_log"] = res["event_log"].tolist()
+mods = sorted({m.split(".")[0] for m in sys.modules} & {"numba", "scipy", "xarray", "dask"})
+print(json.dumps({"result": res, "imported": mods}, default=float))
+"""
+
+
+def _run(cache: Path) -> tuple[dict, str]:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    proc = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True,
+                          env=env, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
+
+
+def _same(a: dict, b: dict) -> bool:
+    """Equal bit for bit as printed (NaN equals NaN: no collapse time)."""
+    return json.dumps(a, sort_keys=True, default=float) == json.dumps(b, sort_keys=True,
+                                                                       default=float)
+
+
+def _object(cache: Path) -> Path:
+    (meta,) = cache.glob("urmx-numba-*/march-*.json")
+    return meta.with_name(json.loads(meta.read_text())["object"])
+
+
+@pytest.mark.slow
+def test_compiled_once_then_loaded_without_numba_with_equal_results(tmp_path):
+    first, err = _run(tmp_path)
+    assert "compiling the kernel" in err and "kernel compiled in" in err
+    assert "numba" in first["imported"]  # the cold process compiled it
+    obj = _object(tmp_path)
+    assert obj.stat().st_size > 10_000
+    again, err = _run(tmp_path)
+    assert err == ""  # nothing compiled, nothing said
+    assert again["imported"] == []  # the warm process never imports numba
+    assert _same(again["result"], first["result"])  # bit for bit, event log included
+    assert first["result"]["events"] > 10 and first["result"]["base_impacts"] > 0
+    # a damaged object is detected by its checksum, compiled anew, and never run
+    data = bytearray(obj.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    obj.write_bytes(bytes(data))
+    damaged, err = _run(tmp_path)
+    assert "is unusable (its checksum does not match); compiling it again" in err
+    assert _same(damaged["result"], first["result"])
+    healed, err = _run(tmp_path)
+    assert err == "" and _same(healed["result"], first["result"])
+
+
+def test_a_wrong_array_is_refused_before_the_loop_sees_it():
+    wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0)
+    tab = kernel.tables(wall, 0.01)
+    with pytest.raises(ValueError, match=r"kernel array hist: <f8 1-D .* 2-D"):
+        tab.args.put("hist", np.zeros(5))
+    with pytest.raises(ValueError, match=r"kernel array ag: <i8"):
+        tab.args.put("ag", np.zeros(5, np.int64))
+    with pytest.raises(ValueError, match="contiguous: False"):
+        tab.args.put("ag", np.zeros(10)[::2])
+    names = [x[0] for x in kernel.ARRAYS]
+    arrays = {name: tab.args[name] for name in names}
+    del arrays["KP"]
+    with pytest.raises(ValueError, match=r"missing: \['KP'\]"):
+        native.Args(kernel.ARRAYS, arrays, 0.01)
+    # the refused arrays left the block as it was: an analysis still runs correctly
+    ag = np.sin(np.arange(200) * 0.1)
+    assert _same(kernel.run(wall, ag, 0.01), kernel.run(wall, ag.copy(), 0.01))
+
+
+def test_threads_sharing_a_wall_get_the_serial_results():
+    """The call holds the GIL and a wall's blocks are locked from a run until its outputs
+    are read: threads running the same wall (as a threaded dask worker may) get exactly
+    what one thread gets."""
+    wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                     top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
+    t = np.arange(801) * 0.01
+    records = [(1.0 + 0.3 * k) * np.sin(2 * np.pi * 1.5 * t) for k in range(6)]
+    serial = [kernel.run(wall, ag, 0.01) for ag in records]
+    out: dict = {}
+
+    def work(k):
+        for _ in range(5):
+            out[k] = kernel.run(wall, records[k], 0.01)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(6)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert all(_same(out[k], serial[k]) for k in range(6))
+    assert len({r["peak_top_displacement"] for r in serial}) == 6

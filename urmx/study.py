@@ -439,9 +439,9 @@ def local_client(n_workers: int | None = None, threads: bool = False):
     Parameters
     ----------
     n_workers : int, optional
-        Worker processes of one thread each (default: one per core). The numba kernel
-        holds the GIL, so processes beat threads; the kernel is compiled (or loaded from
-        numba's cache) here first, so the workers load it from the cache.
+        Worker processes of one thread each (default: one per core). The kernel holds
+        the GIL, so processes beat threads; the kernel is compiled (or loaded from the
+        cache) here first, so the workers load its native code from the cache.
     threads : bool
         One worker in this process with `n_workers` threads instead.
 

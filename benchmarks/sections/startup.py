@@ -220,8 +220,8 @@ CHOICES = [
         ["the loop as a native object: two pointer arguments (array addresses and shapes, "
          "scalars), its object code cached and loaded by llvmlite without numba; no Python "
          "wrapper over 51 arrays to compile (`urmx/native.py`)", "17.8 -> 14.3 s",
-         "kernel call 0.560-0.580 ms vs 0.546-0.581 ms; `run()` overhead 11.1 vs 11.1 us",
-         "this change"],
+         "2-4 % slower (interleaved: 0.577-0.605 vs 0.555-0.585 ms; "
+         "`run()` overhead 11.1 vs 11.1 us; results bit for bit equal)", "4dfc985"],
         ["the same behind a generated wrapper that calls the unchanged loop (tried, not "
          "taken)", "17.9 s (the wrapper's module optimised and compiled again)", "same",
          "-"],

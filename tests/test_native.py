@@ -81,7 +81,7 @@ def test_a_wrong_array_is_refused_before_the_loop_sees_it():
         tab.args.put("hist", np.zeros(5))
     with pytest.raises(ValueError, match=r"kernel array ag: <i8"):
         tab.args.put("ag", np.zeros(5, np.int64))
-    with pytest.raises(ValueError, match="contiguous: False"):
+    with pytest.raises(ValueError, match="contiguous: False, aligned: True"):
         tab.args.put("ag", np.zeros(10)[::2])
     names = [x[0] for x in kernel.ARRAYS]
     arrays = {name: tab.args[name] for name in names}
@@ -115,3 +115,23 @@ def test_threads_sharing_a_wall_get_the_serial_results():
         th.join()
     assert all(_same(out[k], serial[k]) for k in range(6))
     assert len({r["peak_top_displacement"] for r in serial}) == 6
+
+
+def test_a_wall_with_unaligned_parameters_runs_as_its_aligned_twin():
+    """A wall received by a dask worker can hold its parameters in an unaligned view of
+    the message buffer: the kernel copies them (the run used to stop on this)."""
+    wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                     top_stiffness=815e3, top_mass=20000.0, top_damping=0.12, pmr=60.0)
+    P = wall.params
+    raw = np.zeros(P.nbytes + 1, np.uint8)[1:]
+    odd = raw.view(np.float64)
+    odd[:] = P
+    assert not odd.flags.aligned
+    twin = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                     top_stiffness=815e3, top_mass=20000.0, top_damping=0.12, pmr=60.0)
+    object.__setattr__(twin, "_params", odd)
+    kernel.clear_cache()
+    ag = 2.5 * np.sin(np.arange(600) * 0.06)
+    res = kernel.run(twin, ag, 0.01)
+    assert res["events"] > 5
+    assert _same(res, kernel.run(wall, ag, 0.01))

@@ -1619,7 +1619,9 @@ class Tables:
     work arrays of :func:`_march`."""
 
     def __init__(self, wall: Wall, dt: float):
-        P = wall.params
+        # a copy: the loop reads aligned, contiguous arrays it alone owns (a wall of a study
+        # batch may hold its parameters in an unaligned view of a received buffer)
+        P = np.array(wall.params, dtype=np.float64)
         self.P = P
         self.dt = float(dt)
         self.nfull = n_dof(P)

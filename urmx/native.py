@@ -81,8 +81,9 @@ class Args:
         if a.dtype.str != dtype or a.ndim != ndim or not (a.flags.c_contiguous
                                                           and a.flags.aligned):
             raise ValueError(f"kernel array {name}: {a.dtype.str} {a.ndim}-D "
-                             f"(contiguous: {a.flags.c_contiguous}), the loop reads a "
-                             f"C-contiguous {dtype} {ndim}-D array")
+                             f"(contiguous: {a.flags.c_contiguous}, aligned: "
+                             f"{a.flags.aligned}), the loop reads an aligned, C-contiguous "
+                             f"{dtype} {ndim}-D array")
         at = i * SLOT
         self.iv[at] = _address(a)
         self.iv[at + 1:at + 1 + ndim] = a.shape

@@ -181,16 +181,7 @@ class Lazy:
         return f"<urmx.jitcache.Lazy {self.__qualname__} (numba {self.options})>"
 
 
-class Deferred:
-    """A numba object (an intrinsic, say) that ``factory`` makes once numba is imported."""
-
-    def __init__(self, factory):
-        self.factory = factory
-        self.value = None
-
-
 _LAZY: list[Lazy] = []
-_DEFERRED: list[Deferred] = []
 _LOCK = threading.RLock()
 _MATERIALIZED = False
 
@@ -207,20 +198,10 @@ def jit(**options):
     return decorate
 
 
-def deferred(factory):
-    """A placeholder for ``factory()``, made when numba is imported (:func:`materialize`)."""
-    if _MATERIALIZED:
-        return factory()
-    item = Deferred(factory)
-    _DEFERRED.append(item)
-    return item
-
-
 def materialize() -> None:
-    """Import numba, install urmx's cache locator, make the deferred objects and make
-    every marked function a numba dispatcher, in the module globals of urmx too (numba
-    resolves the functions a compiled function calls through its globals when it compiles
-    it)."""
+    """Import numba, install urmx's cache locator and make every marked function a numba
+    dispatcher, in the module globals of urmx too (numba resolves the functions a compiled
+    function calls through its globals when it compiles it)."""
     global _MATERIALIZED
     if _MATERIALIZED:
         return
@@ -232,8 +213,6 @@ def materialize() -> None:
         locator, impl = _locator_class()
         if not any(c.__name__ == locator.__name__ for c in impl._locator_classes):
             impl._locator_classes.insert(0, locator)
-        for item in _DEFERRED:
-            item.value = item.factory()
         for lazy in _LAZY:
             lazy.dispatcher = numba.njit(**lazy.options)(lazy.py_func)
         for name, module in list(sys.modules.items()):
@@ -242,6 +221,4 @@ def materialize() -> None:
                 for key, value in list(space.items()):
                     if isinstance(value, Lazy):
                         space[key] = value.dispatcher
-                    elif isinstance(value, Deferred):
-                        space[key] = value.value
         _MATERIALIZED = True

@@ -144,10 +144,10 @@ N_OUT = 11
 # pieces: held state x family x branches (module docstring); see mode_index
 NPIECE = 312
 REL_W = 2 * NP + 2  # a release row: coefficients on y, on y_d, on xg_dd, constant
-# the arrays of _march, in the order of its argument block (urmx.native), as (name, dtype,
-# number of dimensions): the wall's parameters, the record, the geometry, piece and work
-# arrays of Tables, and the outputs. _march's views of them are typed from this table and
-# every Tables checks its arrays against it.
+# the arrays of _march, in the order of their slots in its argument block (urmx.native),
+# as (name, dtype, number of dimensions): the wall's parameters, the record, the geometry,
+# piece and work arrays of Tables, and the outputs. The native call is compiled for this
+# table and every Tables checks its arrays against it.
 _F, _I, _B = "<f8", "<i8", "|b1"
 ARRAYS = (
     ("P", _F, 1), ("ag", _F, 1),
@@ -164,8 +164,14 @@ ARRAYS = (
     ("counts", _I, 1),
     ("peaks", _F, 1), ("outs", _F, 1), ("hist", _F, 2), ("evlog", _F, 2),
 )
-I_SCALARS = len(ARRAYS) * native.SLOT  # ntail, law, want_hist follow the array slots
-_view = jitcache.deferred(lambda: native.view_intrinsic(ARRAYS))
+# _march's parameters in order: names of ARRAYS, of the integer arguments (INTS) and of
+# the real ones (REALS), and tuples of array names (passed as tuples)
+INTS = ("ntail", "law", "want_hist")
+REALS = ("dt", "cor", "window")
+LOOP_ARGS = ("P", "ag", "dt", "ntail", "cor", "law", "window",
+             tuple(x[0] for x in ARRAYS[2:9]), tuple(x[0] for x in ARRAYS[9:16]),
+             tuple(x[0] for x in ARRAYS[16:47]), "peaks", "outs", "hist", "want_hist",
+             "evlog")
 
 # Compiled functions (urmx.jitcache: numba is imported only when one is compiled). The
 # integration loop _march is compiled once into a native object that later processes load
@@ -1170,41 +1176,24 @@ def record_row(hist, k, L, N, ist, r, v, val, nfull):
 
 
 @inner
-def _march(iv, fv):
-    """Integrate one analysis. The arguments are the blocks of :class:`urmx.native.Args`:
-    the arrays of ``ARRAYS`` (by address and shape) and ``ntail``, ``law`` and
-    ``want_hist`` in iv; ``dt``, ``cor`` and ``window`` in fv.
+def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, hist,
+           want_hist, evlog):
+    """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
 
-    ag: scaled ground acceleration [m/s2] (N samples); geo: the held states' watch rows,
-    coordinate maps, inverse masses, rotation masks, sizes and tracker rows
-    (:func:`geometry`); pieces: the piece tables (:class:`Tables`); work: scratch arrays.
-    Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist, hist[k, :] at every grid point
-    k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t, pattern, then r, r_d). Returns a
-    status code; ST_NEED_PIECE (with the piece in outs[O_NEED]) when a piece's tables are
-    missing (the caller builds them, runs again).
+    geo: the held states' watch rows, coordinate maps, inverse masses, rotation masks,
+    sizes and tracker rows (:func:`geometry`); pieces: the piece tables (:class:`Tables`);
+    work: scratch arrays. Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist,
+    hist[k, :] at every grid point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t,
+    pattern, then r, r_d). Returns a status code; ST_NEED_PIECE (with the piece in
+    outs[O_NEED]) when a piece's tables are missing (the caller builds them, runs again).
 
-    Compiled without numba's reference counting (``_nrt=False``): it never allocates. It
-    has no Python wrapper: it is compiled once into native code (:mod:`urmx.native`)."""
-    P, ag = _view(iv, 0), _view(iv, 1)
-    GL, GN, GX, GMI, GROT, GNN, GTR = (_view(iv, 2), _view(iv, 3), _view(iv, 4), _view(iv, 5),
-                                       _view(iv, 6), _view(iv, 7), _view(iv, 8))
-    ready, nsub, mats, vecs, prop, pvec, REL = (_view(iv, 9), _view(iv, 10), _view(iv, 11),
-                                                _view(iv, 12), _view(iv, 13), _view(iv, 14),
-                                                _view(iv, 15))
-    D, cf, ist, rows, vrows, agc = (_view(iv, 16), _view(iv, 17), _view(iv, 18),
-                                    _view(iv, 19), _view(iv, 20), _view(iv, 21))
-    sig, kap, kind, tgt, e_a, ed_a = (_view(iv, 22), _view(iv, 23), _view(iv, 24),
-                                      _view(iv, 25), _view(iv, 26), _view(iv, 27))
-    e_b, ed_b, RT, RVT, AGT, KP = (_view(iv, 28), _view(iv, 29), _view(iv, 30),
-                                   _view(iv, 31), _view(iv, 32), _view(iv, 33))
-    OPN, val_a, der_a, val_b, der_b, r = (_view(iv, 34), _view(iv, 35), _view(iv, 36),
-                                          _view(iv, 37), _view(iv, 38), _view(iv, 39))
-    v, rb, vb, sacc, sjerk, tmp = (_view(iv, 40), _view(iv, 41), _view(iv, 42),
-                                   _view(iv, 43), _view(iv, 44), _view(iv, 45))
-    counts, peaks, outs, hist, evlog = (_view(iv, 46), _view(iv, 47), _view(iv, 48),
-                                        _view(iv, 49), _view(iv, 50))
-    ntail, law, want_hist = iv[I_SCALARS], iv[I_SCALARS + 1], iv[I_SCALARS + 2] != 0
-    dt, cor, window = fv[0], fv[1], fv[2]
+    Compiled without numba's reference counting (``_nrt=False``): it never allocates. It has
+    no Python wrapper: :mod:`urmx.native` calls it through a shim from two argument blocks
+    (``ARRAYS``, ``INTS``, ``REALS``; the shim passes them in the order of ``LOOP_ARGS``)."""
+    GL, GN, GX, GMI, GROT, GNN, GTR = geo
+    ready, nsub, mats, vecs, prop, pvec, REL = pieces
+    (D, cf, ist, rows, vrows, agc, sig, kap, kind, tgt, e_a, ed_a, e_b, ed_b, RT, RVT, AGT,
+     KP, OPN, val_a, der_a, val_b, der_b, r, v, rb, vb, sacc, sjerk, tmp, counts) = work
     nfull = 3 - int(P[P_RIGID_B]) - int(P[P_RIGID_T])
     N = ag.shape[0]
     nsteps = N - 1 + ntail
@@ -1661,7 +1650,8 @@ class Tables:
         names = [x[0] for x in ARRAYS]
         fixed = [P, _NO_RECORD, *self.geo, *self.pieces, *self.work, np.zeros(N_TRACK),
                  np.zeros(N_OUT), _NO_HIST, _NO_LOG]
-        self.args = native.Args(ARRAYS, dict(zip(names, fixed, strict=True)), self.dt)
+        self.args = native.Args(ARRAYS, dict(zip(names, fixed, strict=True)), self.dt,
+                                loop_args=(LOOP_ARGS, INTS, REALS))
 
     @property
     def nbytes(self) -> int:

@@ -1,14 +1,18 @@
 """The kernel's integration loop as native code: compiled once by numba, loaded in ms.
 
-The loop (:func:`urmx.kernel._march`) takes two pointer arguments: an int64 block with the
-address and shape of each of its arrays (``urmx.kernel.ARRAYS``, one slot of ``SLOT``
-entries each) followed by its integer arguments, and a float64 block with its real ones.
-A cold start compiles it with numba and writes its machine code (the loop and every helper
-it calls; it refers to no symbol outside itself) as an object file into urmx's cache folder
-(:mod:`urmx.jitcache`: keyed on the compiled sources and the numba, llvmlite and Python
-versions; here also on the CPU, since the code uses this CPU's instruction set). Every
-later process loads that object with llvmlite's MCJIT (a few ms) and calls it through
-ctypes: it never imports numba, whose import and cache loading cost about 0.8 s a process.
+numba compiles the loop (:func:`urmx.kernel._march`, 15 arguments, 51 arrays in all) as
+usual. A small LLVM function, ``urmx_march_native(ret, exc, iv, fv)``, is then added to
+its module: it reads the loop's arguments from two blocks (an int64 block with the address
+and shape of each array of ``urmx.kernel.ARRAYS``, one slot of ``SLOT`` entries each,
+followed by the integer arguments; a float64 block with the real ones), passes them as
+numba passes arguments (an array as meminfo, parent, size, item size, data, shape and
+strides) and calls the loop. The module (the loop as numba optimised it, untouched) and
+the shim are compiled to an object file, which refers to no symbol outside itself, and
+written into urmx's cache folder (:mod:`urmx.jitcache`: keyed on the compiled sources and
+the numba, llvmlite and Python versions; here also on the CPU, since the code uses this
+CPU's instruction set). Every process, the compiling one included, loads that object with
+llvmlite's MCJIT (a few ms) and calls the shim through ctypes: a warm process never
+imports numba, whose import and cache loading cost about 0.8 s a process.
 
 Before an object is loaded its SHA-256 and the array layout it was compiled for are
 checked against the JSON file that names it (written after the object, which is named by
@@ -49,8 +53,9 @@ class Args:
     (the ``record`` array) to :meth:`run`. Hold :attr:`lock` from a run until its outputs
     are read: a wall's blocks and arrays serve one analysis at a time."""
 
-    def __init__(self, layout, arrays: dict, dt: float, record: str = "ag"):
+    def __init__(self, layout, arrays: dict, dt: float, record: str = "ag", loop_args=None):
         self.layout = tuple(tuple(x) for x in layout)
+        self.loop_args = loop_args
         self._index = {x[0]: i for i, x in enumerate(self.layout)}
         missing = [name for name in self._index if name not in arrays]
         if missing or len(arrays) != len(self.layout):
@@ -98,59 +103,17 @@ class Args:
         integer arguments and the real ones after dt; returns its status code."""
         fn = self._fn
         if fn is None:
-            fn = self._fn = function(self.layout, loop)
+            fn = self._fn = function(self.layout, loop, self.loop_args)
         iv, at = self.iv, self._record_at
         iv[at] = record.ctypes.data
         iv[at + 1] = record.shape[0]  # (the caller keeps the record alive during the run)
         n = self._n
         iv[n], iv[n + 1], iv[n + 2] = ints
         self.fv[1], self.fv[2] = reals
-        if fn(*self._ptrs) != 0:  # numba's status word: the loop raises nothing
+        status = fn(*self._ptrs)
+        if status < 0:  # numba's error status: the loop raises nothing
             raise RuntimeError("the native kernel reported an error status")
-        return self._ret.value
-
-
-def view_intrinsic(layout):
-    """A numba intrinsic ``view(iv, k)``: the k-th array of ``layout`` as a C-contiguous
-    array over the memory its slot of the block names (k a constant). It owns nothing:
-    the loop is compiled without reference counting, and ``numba.carray`` needs it."""
-    from numba import types
-    from numba.core.extending import intrinsic
-    from numba.np.arrayobj import make_array, populate_array
-
-    dtypes = {"<f8": types.float64, "<i8": types.int64, "|b1": types.boolean}
-
-    @intrinsic(prefer_literal=True)
-    def view(typingctx, iv, k):
-        if not isinstance(k, types.IntegerLiteral):
-            return None
-        index = k.literal_value
-        _, dtype, ndim = layout[index]
-        item = dtypes[dtype]
-        aryty = types.Array(item, ndim, "C")
-
-        def codegen(context, builder, signature, args):
-            block = args[0]
-            at = index * SLOT
-
-            def entry(j):
-                return builder.load(builder.gep(block, [context.get_constant(types.intp,
-                                                                              at + j)]))
-
-            ary = make_array(aryty)(context, builder)
-            dims = [entry(1 + j) for j in range(ndim)]
-            size = context.get_abi_sizeof(context.get_data_type(item))
-            strides = [context.get_constant(types.intp, size)]
-            for j in range(ndim - 1, 0, -1):
-                strides.insert(0, builder.mul(strides[0], dims[j]))
-            data = builder.inttoptr(entry(0), context.get_data_type(item).as_pointer())
-            populate_array(ary, data=data, shape=dims, strides=strides,
-                           itemsize=context.get_constant(types.intp, size), meminfo=None)
-            return ary._getvalue()
-
-        return aryty(iv, k), codegen
-
-    return view
+        return status
 
 
 # ---- loading or compiling the native loop ----------------------------------------------
@@ -159,17 +122,17 @@ _FUNCTION = None
 _FUNCTION_LAYOUT = None
 _KEEP: list = []  # the MCJIT engine or numba library behind _FUNCTION
 _LOCK = threading.Lock()
-_PROTO = ctypes.PYFUNCTYPE(ctypes.c_int32, ctypes.c_void_p, ctypes.c_void_p,
+_PROTO = ctypes.PYFUNCTYPE(ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p,
                            ctypes.c_void_p, ctypes.c_void_p)
 
 
-def function(layout, loop):
+def function(layout, loop, loop_args):
     """The native loop for an array layout: loaded from the cache, else compiled."""
     global _FUNCTION, _FUNCTION_LAYOUT
     if _FUNCTION is None or _FUNCTION_LAYOUT != layout:
         with _LOCK:
             if _FUNCTION is None or _FUNCTION_LAYOUT != layout:
-                _FUNCTION = _load(layout) or _compile(layout, loop)
+                _FUNCTION = _load(layout) or _compile(layout, loop, loop_args)
                 _FUNCTION_LAYOUT = layout
     return _FUNCTION
 
@@ -220,23 +183,32 @@ def _load(layout):
         data = obj.read_bytes()
         if hashlib.sha256(data).hexdigest() != meta.get("sha256"):
             raise ValueError("its checksum does not match")
-        ll = _llvm()
-        engine = ll.create_mcjit_compiler(
-            ll.parse_assembly(""), ll.Target.from_default_triple().create_target_machine())
-        engine.add_object_file(ll.ObjectFileRef.from_data(data))
-        engine.finalize_object()
-        address = engine.get_function_address(meta["symbol"])
-        if not address:
-            raise ValueError(f"it has no symbol {meta['symbol']!r}")
+        return _engine(data, meta["symbol"])
     except Exception as exc:  # anything unusable is compiled anew
         sys.stderr.write(f"urmx: the cached kernel {obj} is unusable ({exc}); "
                          "compiling it again\n")
         return None
+
+
+def _engine(data: bytes, symbol: str):
+    """The function `symbol` of object code `data`, loaded by llvmlite's MCJIT."""
+    ll = _llvm()
+    engine = ll.create_mcjit_compiler(
+        ll.parse_assembly(""), ll.Target.from_default_triple().create_target_machine())
+    engine.add_object_file(ll.ObjectFileRef.from_data(data))
+    engine.finalize_object()
+    address = engine.get_function_address(symbol)
+    if not address:
+        raise ValueError(f"it has no symbol {symbol!r}")
     _KEEP.append(engine)
     return _PROTO(address)
 
 
-def _compile(layout, loop):
+SYMBOL = "urmx_march_native"
+_DTYPES = {"<f8": ("float64", 8), "<i8": ("int64", 8), "|b1": ("boolean", 1)}
+
+
+def _compile(layout, loop, loop_args):
     meta_path = description_path()
     where = meta_path.parent if meta_path else "nowhere: no writable cache folder"
     sys.stderr.write(f"urmx: compiling the kernel (once per install; cached in {where}) "
@@ -247,35 +219,122 @@ def _compile(layout, loop):
     from numba import types
 
     dispatcher = getattr(loop, "dispatcher", None) or loop  # a jitcache.Lazy, or numba's
-    sig = (types.CPointer(types.int64), types.CPointer(types.float64))
+    params, ints, reals = loop_args
+    arrays = {x[0]: types.Array(getattr(types, _DTYPES[x[1]][0]), x[2], "C") for x in layout}
+    scalar = {**{n: types.int64 for n in ints}, **{n: types.float64 for n in reals},
+              "want_hist": types.boolean}
+
+    def numba_type(p):
+        return types.Tuple([numba_type(q) for q in p]) if isinstance(p, tuple) else (
+            arrays[p] if p in arrays else scalar[p])
+
+    sig = tuple(numba_type(p) for p in params)
     dispatcher.compile(sig)
     cres = dispatcher.overloads[sig]
-    symbol = cres.fndesc.mangled_name
-    address = cres.library.get_pointer_to_function(symbol)
-    _KEEP.append(cres.library)
+    library = cres.library
+    ll = _llvm()
+    module = ll.parse_assembly(str(library._final_module))
+    module.link_in(ll.parse_assembly(_shim(layout, params, ints, reals, module.get_function(
+        cres.fndesc.mangled_name))))
+    data = library._codegen._tm.emit_object(module)
+    fn = _engine(data, SYMBOL)
     if meta_path is not None:
         try:
-            _store(cres.library, symbol, layout, meta_path)
+            _store(data, SYMBOL, layout, meta_path)
         except Exception as exc:  # the kernel runs; the next process compiles again
             sys.stderr.write(f"urmx: could not store the compiled kernel ({exc}); each "
                              "new process will compile it\n")
     sys.stderr.write(f"urmx: kernel compiled in {time.perf_counter() - started:.1f} s\n")
-    return _PROTO(address)
+    return fn
 
 
-def _object_code(library) -> bytes:
-    """The machine code MCJIT made of a finalized numba library (numba keeps it for its own
-    cache); emitted again if this numba does not keep it."""
-    try:
-        return library._get_compiled_object()
-    except Exception:
-        return library._codegen._tm.emit_object(library._final_module)
+def _shim(layout, params, ints, reals, loop) -> str:
+    """LLVM IR of ``urmx_march_native(iv, fv)``: the loop's arguments read from the blocks
+    and passed as numba passes them (an array as meminfo, parent, size, item size, data,
+    shape and strides), the loop called, its result returned (-1000 on an error status)."""
+    index = {x[0]: i for i, x in enumerate(layout)}
+    body, values = [], []
+    count = [0]
+
+    def tmp():
+        count[0] += 1
+        return f"%t{count[0]}"
+
+    def load(block, kind, k):
+        ptr, val = tmp(), tmp()
+        body.append(f"  {ptr} = getelementptr {kind}, ptr %{block}, i64 {k}")
+        body.append(f"  {val} = load {kind}, ptr {ptr}")
+        return val
+
+    def array(name):
+        _, dtype, ndim = layout[index[name]]
+        at = index[name] * SLOT
+        size = _DTYPES[dtype][1]
+        address = load("iv", "i64", at)
+        dims = [load("iv", "i64", at + 1 + j) for j in range(ndim)]
+        nitems = dims[0]
+        for d in dims[1:]:
+            prod = tmp()
+            body.append(f"  {prod} = mul i64 {nitems}, {d}")
+            nitems = prod
+        data = tmp()
+        body.append(f"  {data} = inttoptr i64 {address} to ptr")
+        strides = [str(size)]
+        for j in range(ndim - 1, 0, -1):
+            st = tmp()
+            body.append(f"  {st} = mul i64 {strides[0]}, {dims[j]}")
+            strides.insert(0, st)
+        values.extend([("ptr", "null"), ("ptr", "null"), ("i64", nitems),
+                       ("i64", str(size)), ("ptr", data)])
+        values.extend(("i64", d) for d in dims)
+        values.extend(("i64", st) for st in strides)
+
+    def walk(p):
+        if isinstance(p, tuple):
+            for q in p:
+                walk(q)
+        elif p in index:
+            array(p)
+        elif p in ints:
+            v = load("iv", "i64", len(layout) * SLOT + ints.index(p))
+            if p == "want_hist":  # a boolean: numba passes it as a byte
+                b, byte = tmp(), tmp()
+                body.append(f"  {b} = icmp ne i64 {v}, 0")
+                body.append(f"  {byte} = zext i1 {b} to i8")
+                values.append(("i8", byte))
+            else:
+                values.append(("i64", v))
+        else:
+            values.append(("double", load("fv", "double", reals.index(p))))
+
+    for p in params:
+        walk(p)
+    expected = [str(a.type) for a in loop.arguments][2:]
+    got = [t for t, _ in values]
+    if got != expected:  # numba passes arguments otherwise than this shim assumes
+        first = next((i for i, (a, b) in enumerate(zip(got, expected, strict=False))
+                      if a != b), min(len(got), len(expected)))
+        raise RuntimeError(f"the loop's native signature differs from the shim's at "
+                           f"parameter {first} ({len(expected)} parameters, {len(got)} "
+                           "made)")
+    args = ", ".join(f"{t} {v}" for t, v in values)
+    return "\n".join([
+        f"declare i32 @\"{loop.name}\"(ptr, ptr, {', '.join(expected)})",
+        f"define i64 @{SYMBOL}(ptr %ret, ptr %exc, ptr %iv, ptr %fv) {{",
+        "entry:",
+        *body,
+        f"  %status = call i32 @\"{loop.name}\"(ptr %ret, ptr %exc, {args})",
+        "  %value = load i64, ptr %ret",
+        "  %ok = icmp eq i32 %status, 0",
+        "  %out = select i1 %ok, i64 %value, i64 -1000",
+        "  ret i64 %out",
+        "}",
+    ]) + "\n"
 
 
-def _store(library, symbol: str, layout, meta: Path) -> None:
+def _store(data: bytes, symbol: str, layout, meta: Path) -> None:
     """Write the object under a name of its checksum, then the description that names it
     (each by an atomic rename): a reader sees a whole pair or none."""
-    data = _object_code(library)
     digest = hashlib.sha256(data).hexdigest()
     obj = meta.with_name(f"{meta.stem}-{digest[:16]}.o")
     tag = f".tmp-{os.getpid()}-{threading.get_ident()}"

@@ -217,13 +217,18 @@ CHOICES = [
          "10 % slower (2 calls per event, 11 array arguments)", "5114605"],
         ["`NUMBA_OPT` lower, loop vectorisation off, `noalias` hints (tried, not taken)",
          "no gain", "no gain or slower", "-"],
-        ["the loop as a native object: two pointer arguments (array addresses and shapes, "
-         "scalars), its object code cached and loaded by llvmlite without numba; no Python "
-         "wrapper over 51 arrays to compile (`urmx/native.py`)", "17.8 -> 14.3 s",
-         "2-4 % slower (interleaved: 0.577-0.605 vs 0.555-0.585 ms; "
-         "`run()` overhead 11.1 vs 11.1 us; results bit for bit equal)", "4dfc985"],
-        ["the same behind a generated wrapper that calls the unchanged loop (tried, not "
-         "taken)", "17.9 s (the wrapper's module optimised and compiled again)", "same",
+        ["the loop as a native object, loaded by llvmlite without numba: a small LLVM shim "
+         "reads the loop's arguments from two blocks (array addresses and shapes, scalars) "
+         "and calls numba's optimised loop unchanged; no Python wrapper over 51 arrays to "
+         "compile (`urmx/native.py`)", "17.8 -> 16.2 s",
+         "same (loop call 0.545-0.563 vs 0.539-0.562 ms interleaved; `run()` overhead 11.1 "
+         "vs 11.1 us; results bit for bit equal)", "5a1bac9"],
+        ["the same with the loop taking the blocks and making its array views itself "
+         "(tried, replaced)", "13.3-14.3 s",
+         "2-4 % slower (0.566-0.589 ms: the loop grew from 42 to 48 KB, more spills)",
+         "ca41fbd"],
+        ["the loop behind a numba-compiled wrapper (tried, not taken)",
+         "14-18 s", "2-4 % slower (the loop optimised a second time in the wrapper's module)",
          "-"],
     ]),
     "",

@@ -282,6 +282,22 @@ def test_cli_table(capsys, record5s):
     assert len({line.index(" m") for line in lines[2:5]}) == 1  # aligned unit column
 
 
+def test_cli_closed_pipe_ends_quietly(record5s):
+    """`urmx simulate ... | head -2`: the reader is gone before the table is printed; the
+    command ends with 141 (128 + SIGPIPE) and no traceback (it used to print one)."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "urmx.cli", "simulate", str(EXAMPLES / "benchmark-wall.toml"),
+         str(record5s), "--dt", "0.02", "--unit", "m/s2"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader goes away before anything is written
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 141
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+
+
 def test_cli_out_and_plot(capsys, record5s, tmp_path, first5s, wall):
     nc, png = tmp_path / "run.nc", tmp_path / "run.png"
     rc = main(["simulate", str(EXAMPLES / "benchmark-wall.toml"), str(record5s), "--dt", "0.02",

@@ -5,13 +5,15 @@ registration must stay cheap (heavy imports go inside the handler).
 
 Errors: a :class:`urmx.UrmxError` (bad input, a missing or unwritable file, a run that
 cannot proceed) is printed as one line and exits with status 2; Ctrl-C prints one line and
-exits with 130; anything else is a bug and shows its traceback.
+exits with 130; a closed output pipe (``urmx ... | head``) ends quietly with 141 (128 +
+SIGPIPE, as a shell reports it); anything else is a bug and shows its traceback.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from pathlib import Path
 
@@ -52,6 +54,10 @@ def main(argv: list[str] | None = None) -> int:
     except UrmxError as exc:  # bad input or a run that cannot proceed: one line
         print(f"urmx {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader went away (`urmx simulate ... | head -2`)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # nothing more to flush at exit
+        return 141
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -87,7 +87,7 @@ def test_a_wrong_array_is_refused_before_the_loop_sees_it():
     arrays = {name: tab.args[name] for name in names}
     del arrays["KP"]
     with pytest.raises(ValueError, match=r"missing: \['KP'\]"):
-        native.Args(kernel.ARRAYS, arrays, 0.01)
+        native.Args(kernel.ARRAYS, arrays, 0.01, kernel.LOOP)
     # the refused arrays left the block as it was: an analysis still runs correctly
     ag = np.sin(np.arange(200) * 0.1)
     assert _same(kernel.run(wall, ag, 0.01), kernel.run(wall, ag.copy(), 0.01))

@@ -164,8 +164,8 @@ ARRAYS = (
     ("counts", _I, 1),
     ("peaks", _F, 1), ("outs", _F, 1), ("hist", _F, 2), ("evlog", _F, 2),
 )
-# _march's parameters in order: names of ARRAYS, of the integer arguments (INTS) and of
-# the real ones (REALS), and tuples of array names (passed as tuples)
+# _march's parameters in order: names of ARRAYS, of the integer arguments (INTS; want_hist
+# a boolean) and of the real ones (REALS), and tuples of array names (passed as tuples)
 INTS = ("ntail", "law", "want_hist")
 REALS = ("dt", "cor", "window")
 LOOP_ARGS = ("P", "ag", "dt", "ntail", "cor", "law", "window",
@@ -1189,7 +1189,8 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
 
     Compiled without numba's reference counting (``_nrt=False``): it never allocates. It has
     no Python wrapper: :mod:`urmx.native` calls it through a shim from two argument blocks
-    (``ARRAYS``, ``INTS``, ``REALS``; the shim passes them in the order of ``LOOP_ARGS``)."""
+    (``ARRAYS``, ``INTS``, ``REALS``; the shim passes them in the order of ``LOOP_ARGS``,
+    as ``LOOP`` describes)."""
     GL, GN, GX, GMI, GROT, GNN, GTR = geo
     ready, nsub, mats, vecs, prop, pvec, REL = pieces
     (D, cf, ist, rows, vrows, agc, sig, kap, kind, tgt, e_a, ed_a, e_b, ed_b, RT, RVT, AGT,
@@ -1477,6 +1478,10 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     return status
 
 
+# the loop as urmx.native compiles and calls it
+LOOP = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",))
+
+
 # The event semantics as the scipy reference solver calls them from Python: the same
 # functions compiled with Python wrappers (and cached), only when the reference is used;
 # the kernel calls the wrapper-less ones above.
@@ -1650,8 +1655,7 @@ class Tables:
         names = [x[0] for x in ARRAYS]
         fixed = [P, _NO_RECORD, *self.geo, *self.pieces, *self.work, np.zeros(N_TRACK),
                  np.zeros(N_OUT), _NO_HIST, _NO_LOG]
-        self.args = native.Args(ARRAYS, dict(zip(names, fixed, strict=True)), self.dt,
-                                loop_args=(LOOP_ARGS, INTS, REALS))
+        self.args = native.Args(ARRAYS, dict(zip(names, fixed, strict=True)), self.dt, LOOP)
 
     @property
     def nbytes(self) -> int:
@@ -1952,7 +1956,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
             if evlog is not None:
                 args.put("evlog", evlog)
             while True:
-                status = args.run(_march, ag, (ntail, law, int(history)), (cor, window))
+                status = args.run(ag, (ntail, law, int(history)), (cor, window))
                 if status != ST_NEED_PIECE:
                     break
                 # a piece not foreseen as reachable: add it, run again

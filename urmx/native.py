@@ -31,6 +31,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -40,7 +41,21 @@ SLOT = 5  # int64 entries of an array in the block: its address and up to 4 dime
 
 
 def _address(a: np.ndarray) -> int:
-    return a.__array_interface__["data"][0]
+    return a.ctypes.data
+
+
+class Loop(NamedTuple):
+    """What the shim must know of the compiled loop: the function (numba's dispatcher or a
+    :class:`urmx.jitcache.Lazy` of it) and its parameters in order, as names of the layout's
+    arrays, of the integer arguments (``ints``, in the int64 block after the array slots;
+    those in ``flags`` are booleans) and of the real ones (``reals``, the float64 block), or
+    tuples of array names (passed as tuples)."""
+
+    function: Any
+    params: tuple
+    ints: tuple
+    reals: tuple
+    flags: tuple = ()
 
 
 class Args:
@@ -49,13 +64,14 @@ class Args:
     ``layout`` names each array of the loop with its dtype and number of dimensions, and
     ``arrays`` gives one for each name: the wall's tables, work and output arrays. They are
     checked against the layout and written once (:meth:`put` replaces one; they must stay
-    alive and in place while they are in the block). An analysis passes its own record
-    (the ``record`` array) to :meth:`run`. Hold :attr:`lock` from a run until its outputs
-    are read: a wall's blocks and arrays serve one analysis at a time."""
+    alive and in place while they are in the block). ``loop`` describes the loop the blocks
+    are for (compiled on the first run if no cached object serves). An analysis passes its
+    own record (the ``record`` array) to :meth:`run`. Hold :attr:`lock` from a run until
+    its outputs are read: a wall's blocks and arrays serve one analysis at a time."""
 
-    def __init__(self, layout, arrays: dict, dt: float, record: str = "ag", loop_args=None):
+    def __init__(self, layout, arrays: dict, dt: float, loop: Loop, record: str = "ag"):
         self.layout = tuple(tuple(x) for x in layout)
-        self.loop_args = loop_args
+        self.loop = loop
         self._index = {x[0]: i for i, x in enumerate(self.layout)}
         missing = [name for name in self._index if name not in arrays]
         if missing or len(arrays) != len(self.layout):
@@ -97,15 +113,15 @@ class Args:
     def __getitem__(self, name: str) -> np.ndarray:
         return self._arrays[name]
 
-    def run(self, loop, record: np.ndarray, ints, reals) -> int:
-        """Run the loop (``loop``: the compiled function, used if it must be compiled) on
-        the record (a C-contiguous float64 array, as :func:`urmx.kernel.run` makes it), the
-        integer arguments and the real ones after dt; returns its status code."""
+    def run(self, record: np.ndarray, ints, reals) -> int:
+        """Run the loop on the record (a C-contiguous float64 array, as
+        :func:`urmx.kernel.run` makes it), the integer arguments and the real ones after dt;
+        returns its status code."""
         fn = self._fn
         if fn is None:
-            fn = self._fn = function(self.layout, loop, self.loop_args)
+            fn = self._fn = function(self.layout, self.loop)
         iv, at = self.iv, self._record_at
-        iv[at] = record.ctypes.data
+        iv[at] = _address(record)
         iv[at + 1] = record.shape[0]  # (the caller keeps the record alive during the run)
         n = self._n
         iv[n], iv[n + 1], iv[n + 2] = ints
@@ -120,19 +136,20 @@ class Args:
 
 _FUNCTION = None
 _FUNCTION_LAYOUT = None
-_KEEP: list = []  # the MCJIT engine or numba library behind _FUNCTION
+_KEEP: list = []  # the MCJIT engines behind the loaded functions
 _LOCK = threading.Lock()
 _PROTO = ctypes.PYFUNCTYPE(ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p,
                            ctypes.c_void_p, ctypes.c_void_p)
 
 
-def function(layout, loop, loop_args):
+def function(layout, loop: Loop):
     """The native loop for an array layout: loaded from the cache, else compiled."""
     global _FUNCTION, _FUNCTION_LAYOUT
     if _FUNCTION is None or _FUNCTION_LAYOUT != layout:
         with _LOCK:
             if _FUNCTION is None or _FUNCTION_LAYOUT != layout:
-                _FUNCTION = _load(layout) or _compile(layout, loop, loop_args)
+                meta_path = description_path()
+                _FUNCTION = _load(layout, meta_path) or _compile(layout, loop, meta_path)
                 _FUNCTION_LAYOUT = layout
     return _FUNCTION
 
@@ -164,14 +181,7 @@ def description_path() -> Path | None:
     return folder / f"march-{_cpu_key(_llvm())}.json"
 
 
-def is_compiled() -> bool:
-    """Whether the native loop of this source and CPU is in the cache."""
-    path = description_path()
-    return path is not None and path.is_file()
-
-
-def _load(layout):
-    meta_path = description_path()
+def _load(layout, meta_path: Path | None):
     if meta_path is None or not meta_path.is_file():
         return None
     obj = meta_path
@@ -208,8 +218,7 @@ SYMBOL = "urmx_march_native"
 _DTYPES = {"<f8": ("float64", 8), "<i8": ("int64", 8), "|b1": ("boolean", 1)}
 
 
-def _compile(layout, loop, loop_args):
-    meta_path = description_path()
+def _compile(layout, loop: Loop, meta_path: Path | None):
     where = meta_path.parent if meta_path else "nowhere: no writable cache folder"
     sys.stderr.write(f"urmx: compiling the kernel (once per install; cached in {where}) "
                      "...\n")
@@ -218,23 +227,23 @@ def _compile(layout, loop, loop_args):
     jitcache.materialize()
     from numba import types
 
-    dispatcher = getattr(loop, "dispatcher", None) or loop  # a jitcache.Lazy, or numba's
-    params, ints, reals = loop_args
+    # a jitcache.Lazy (its dispatcher made by materialize), or numba's dispatcher
+    dispatcher = getattr(loop.function, "dispatcher", None) or loop.function
     arrays = {x[0]: types.Array(getattr(types, _DTYPES[x[1]][0]), x[2], "C") for x in layout}
-    scalar = {**{n: types.int64 for n in ints}, **{n: types.float64 for n in reals},
-              "want_hist": types.boolean}
+    scalar = {**{n: types.int64 for n in loop.ints}, **{n: types.float64 for n in loop.reals},
+              **{n: types.boolean for n in loop.flags}}
 
     def numba_type(p):
         return types.Tuple([numba_type(q) for q in p]) if isinstance(p, tuple) else (
             arrays[p] if p in arrays else scalar[p])
 
-    sig = tuple(numba_type(p) for p in params)
+    sig = tuple(numba_type(p) for p in loop.params)
     dispatcher.compile(sig)
     cres = dispatcher.overloads[sig]
     library = cres.library
     ll = _llvm()
     module = ll.parse_assembly(str(library._final_module))
-    module.link_in(ll.parse_assembly(_shim(layout, params, ints, reals, module.get_function(
+    module.link_in(ll.parse_assembly(_shim(layout, loop, module.get_function(
         cres.fndesc.mangled_name))))
     data = library._codegen._tm.emit_object(module)
     fn = _engine(data, SYMBOL)
@@ -248,7 +257,7 @@ def _compile(layout, loop, loop_args):
     return fn
 
 
-def _shim(layout, params, ints, reals, loop) -> str:
+def _shim(layout, loop: Loop, compiled) -> str:
     """LLVM IR of ``urmx_march_native(iv, fv)``: the loop's arguments read from the blocks
     and passed as numba passes them (an array as meminfo, parent, size, item size, data,
     shape and strides), the loop called, its result returned (-1000 on an error status)."""
@@ -295,9 +304,9 @@ def _shim(layout, params, ints, reals, loop) -> str:
                 walk(q)
         elif p in index:
             array(p)
-        elif p in ints:
-            v = load("iv", "i64", len(layout) * SLOT + ints.index(p))
-            if p == "want_hist":  # a boolean: numba passes it as a byte
+        elif p in loop.ints:
+            v = load("iv", "i64", len(layout) * SLOT + loop.ints.index(p))
+            if p in loop.flags:  # a boolean: numba passes it as a byte
                 b, byte = tmp(), tmp()
                 body.append(f"  {b} = icmp ne i64 {v}, 0")
                 body.append(f"  {byte} = zext i1 {b} to i8")
@@ -305,11 +314,11 @@ def _shim(layout, params, ints, reals, loop) -> str:
             else:
                 values.append(("i64", v))
         else:
-            values.append(("double", load("fv", "double", reals.index(p))))
+            values.append(("double", load("fv", "double", loop.reals.index(p))))
 
-    for p in params:
+    for p in loop.params:
         walk(p)
-    expected = [str(a.type) for a in loop.arguments][2:]
+    expected = [str(a.type) for a in compiled.arguments][2:]
     got = [t for t, _ in values]
     if got != expected:  # numba passes arguments otherwise than this shim assumes
         first = next((i for i, (a, b) in enumerate(zip(got, expected, strict=False))
@@ -319,11 +328,11 @@ def _shim(layout, params, ints, reals, loop) -> str:
                            "made)")
     args = ", ".join(f"{t} {v}" for t, v in values)
     return "\n".join([
-        f"declare i32 @\"{loop.name}\"(ptr, ptr, {', '.join(expected)})",
+        f"declare i32 @\"{compiled.name}\"(ptr, ptr, {', '.join(expected)})",
         f"define i64 @{SYMBOL}(ptr %ret, ptr %exc, ptr %iv, ptr %fv) {{",
         "entry:",
         *body,
-        f"  %status = call i32 @\"{loop.name}\"(ptr %ret, ptr %exc, {args})",
+        f"  %status = call i32 @\"{compiled.name}\"(ptr %ret, ptr %exc, {args})",
         "  %value = load i64, ptr %ret",
         "  %ok = icmp eq i32 %status, 0",
         "  %out = select i1 %ok, i64 %value, i64 -1000",

@@ -135,3 +135,40 @@ def test_a_wall_with_unaligned_parameters_runs_as_its_aligned_twin():
     res = kernel.run(twin, ag, 0.01)
     assert res["events"] > 5
     assert _same(res, kernel.run(wall, ag, 0.01))
+
+
+class _Arg:
+    def __init__(self, type_):
+        self.type = type_
+
+
+class _Compiled:
+    """Stands for numba's compiled loop in LLVM: its name and parameter types (retptr,
+    excinfo, then the arguments as numba passes them)."""
+
+    name = "loop"
+
+    def __init__(self, types_):
+        self.arguments = [_Arg(t) for t in ("ptr", "ptr", *types_)]
+
+
+def test_the_shim_refuses_a_loop_numba_passes_otherwise():
+    """The shim builds the loop's native arguments from the kernel's description; if numba
+    passed them otherwise (another numba, a changed signature) it stops instead of calling
+    the loop with misplaced arguments."""
+    layout = (("a", "<f8", 2),)
+    # numba's convention: an array is meminfo, parent, size, item size, data, shape,
+    # strides; an int64, a boolean (as a byte), a float64
+    compiled = _Compiled(["ptr", "ptr", "i64", "i64", "ptr", "i64", "i64", "i64", "i64",
+                          "i64", "i8", "double"])
+    good = native.Loop(None, ("a", "n", "flag", "x"), ("n", "flag"), ("x",), flags=("flag",))
+    ir = native._shim(layout, good, compiled)
+    assert 'call i32 @"loop"(ptr %ret, ptr %exc, ptr null, ptr null' in ir
+    assert "zext i1" in ir and "load double" in ir
+    wrong_flag = good._replace(flags=())  # the boolean passed as a 64-bit integer
+    with pytest.raises(RuntimeError, match=r"differs from the shim's at parameter 10 "
+                                           r"\(12 parameters, 12 made\)"):
+        native._shim(layout, wrong_flag, compiled)
+    missing = good._replace(params=("a", "n", "flag"))
+    with pytest.raises(RuntimeError, match=r"at parameter 11 \(12 parameters, 11 made\)"):
+        native._shim(layout, missing, compiled)

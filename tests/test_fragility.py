@@ -31,6 +31,7 @@ from urmx.catalog import CatalogError, load_study
 from urmx.model import RIGID, Wall
 
 from .fixtures.records import record_file
+from .fixtures.signals import interruptible
 
 
 @pytest.fixture(scope="module")
@@ -634,7 +635,7 @@ im = "pga"
     st.run_study(study, out=ref, scheduler="serial", progress=False, records_dir=library)
     out = tmp_path / "run.nc"
     proc = subprocess.Popen([*cmd, str(out)], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE, preexec_fn=interruptible)
     n = _wait_for_parts(tmp_path / "run.nc.parts", proc)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)

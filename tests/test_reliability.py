@@ -690,6 +690,7 @@ def test_ctrl_c_gives_one_line(tmp_path):
     """SIGINT to the whole process group of `urmx run` (what Ctrl-C in a terminal does)
     once a few batches are saved: exit 130 and one line saying what is kept."""
     from .fixtures.records import records_folder
+    from .fixtures.signals import interruptible
 
     rdir = records_folder()
     ids = [e["id"] for e in urmx.records.manifest(rdir).values()
@@ -704,7 +705,7 @@ def test_ctrl_c_gives_one_line(tmp_path):
         [sys.executable, "-m", "urmx.cli", "run", str(study), "--out", str(out),
          "--batch-size", "4"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True, env=env,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        preexec_fn=interruptible)
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and proc.poll() is None:
         if parts.is_dir() and len(list(parts.glob("*.npz"))) >= 3:

@@ -18,7 +18,7 @@ import pytest
 
 import benchmarks
 from benchmarks import common, report
-from benchmarks.sections import SECTIONS, grid_scaling, kernel, work_precision
+from benchmarks.sections import SECTIONS, grid_scaling, kernel, startup, work_precision
 from urmx import guard
 from urmx.cli import main
 from urmx.config import project_root
@@ -274,3 +274,35 @@ def test_guard_module_stays_small():
     """The package keeps only the guard; the suite lives in benchmarks/."""
     assert not (project_root() / "urmx" / "bench.py").exists()
     assert len(Path(guard.__file__).read_text().splitlines()) < 250
+
+
+def _startup_data(now_ms: float, base_ms: float) -> dict:
+    """Start-up data as startup.run saves it: 2 pairs x 3 rounds of steady blocks."""
+    def blocks(ms):
+        return [{"min": 0.97 * ms * 1e-3, "median": ms * 1e-3} for _ in range(6)]
+
+    now, base = blocks(now_ms), blocks(base_ms)
+    ratios = {"cold": 15.0 / 90.0, "simulate": 0.4 / 2.0, "steady": base_ms / now_ms,
+              "steady_median": base_ms / now_ms, "steady_rounds": base_ms / now_ms}
+    return {"baseline_commit": "0615fbe", "rounds": 2, "steady_pairs": 2,
+            "raw": {"now": {"steady": now}, "baseline": {"steady": base}},
+            "cold": {"now": 15.0, "baseline": 90.0}, "simulate": {"now": 0.4, "baseline": 2.0},
+            "steady": {"now": 0.97 * now_ms * 1e-3, "baseline": 0.97 * base_ms * 1e-3,
+                       "now_median": now_ms * 1e-3, "baseline_median": base_ms * 1e-3},
+            "reference": {"kernel": 6e-4, "reference": 12.0, "speedup": 20000.0},
+            "ratios": ratios}
+
+
+def test_startup_steady_verdict_fails_on_a_slower_kernel():
+    """The steady-state target is met at the baseline's speed and missed 6 % slower, and
+    the report says how the blocks were measured."""
+    rows = {r[0]: r for r in startup.targets(_startup_data(0.56, 0.56))}
+    steady = [r for k, r in rows.items() if k.startswith("steady state >= 0.95")][0]
+    assert steady[1] == "1.000; 1.000" and steady[2] == "met"
+    slow = [r for r in startup.targets(_startup_data(0.56 / 0.94, 0.56))
+            if r[0].startswith("steady state >= 0.95")][0]
+    assert slow[1] == "0.940; 0.940" and slow[2] == "missed"
+    text = "\n".join(startup.render(_startup_data(0.56, 0.56)))
+    assert "2 pairs of long-lived processes" in text and "3 rounds of a block of 20" in text
+    assert "| benchmark analysis, steady state, median [ms] | 0.560 | 0.560 | 1.000 (speed) |" \
+        in text

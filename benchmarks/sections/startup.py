@@ -38,23 +38,65 @@ kernel.run(w, ag, 0.02, scale=0.5)
 print(json.dumps({"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0}))
 """
 
+# the steady state: a long-lived process per kernel that runs blocks of analyses on demand;
+# both processes of a pair are pinned to the same core, so that a block of one kernel and
+# the next block of the other meet the same host (a neighbour on the other core, the
+# frequency of this one) and their ratio cancels it
 _STEADY = r"""
-import sys, time, json
+import sys, time, json, os
+if hasattr(os, "sched_setaffinity") and int(sys.argv[3]) >= 0:
+    os.sched_setaffinity(0, {int(sys.argv[3])})
 sys.path.insert(0, sys.argv[1])
 import numpy as np
 from urmx import kernel, Wall
 ag = np.loadtxt(sys.argv[2]).ravel() / 100.0
 w = Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0, top_mass=20000.0,
          top_stiffness=815e3, top_damping=0.12, pmr=75.0)
-kernel.run(w, ag, 0.02, scale=0.5)
-ts = []
-for _ in range(int(sys.argv[3])):
-    t = time.perf_counter()
+for _ in range(20):
     kernel.run(w, ag, 0.02, scale=0.5)
-    ts.append(time.perf_counter() - t)
-ts.sort()
-print(json.dumps({"min": ts[0], "median": ts[len(ts) // 2]}))
+print("ready", flush=True)
+for line in sys.stdin:
+    ts = []
+    for _ in range(int(line)):
+        t = time.perf_counter()
+        kernel.run(w, ag, 0.02, scale=0.5)
+        ts.append(time.perf_counter() - t)
+    ts.sort()
+    print(json.dumps({"min": ts[0], "median": ts[len(ts) // 2]}), flush=True)
 """
+#: analyses per block, blocks per kernel and pair, and process pairs (full run; quick: 1/4)
+BLOCK, ROUNDS, PAIRS = 20, 40, 6
+
+
+def _steady(trees: dict, record: str, quick: bool, echo) -> dict:
+    """Blocks of the benchmark analysis alternating between the kernels' processes, pair
+    by pair; returns each kernel's blocks ({"min", "median"} per block) in round order."""
+    out: dict = {name: [] for name in trees}
+    pairs, rounds = (2, 10) if quick else (PAIRS, ROUNDS)
+    cores = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    for p in range(pairs):
+        core = cores[p % len(cores)] if cores else -1  # (-1: not pinned)
+        procs = {name: subprocess.Popen(
+            [sys.executable, "-c", _STEADY, str(tree), record, str(core)],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True) for name, tree in
+            trees.items()}
+        try:
+            for proc in procs.values():
+                if proc.stdout.readline().strip() != "ready":
+                    raise RuntimeError("a steady-state process did not start")
+            names = list(trees)
+            for r in range(rounds):
+                for name in (names if r % 2 == 0 else names[::-1]):
+                    procs[name].stdin.write(f"{BLOCK}\n")
+                    procs[name].stdin.flush()
+                    out[name].append(json.loads(procs[name].stdout.readline()))
+        finally:
+            for proc in procs.values():
+                proc.stdin.close()
+                proc.wait(timeout=60)
+        echo(f"startup: steady pair {p + 1}/{pairs} on core {core}")
+    return out
+
 
 _CLI = ("import sys; sys.path.insert(0, sys.argv.pop(1)); from urmx.cli import main; "
         "sys.exit(main())")
@@ -104,10 +146,9 @@ def run(quick: bool, echo=print) -> dict:
                 res[name]["simulate"].append(time.perf_counter() - t)
                 if out.returncode:
                     raise RuntimeError(out.stderr[-800:])
-        for _ in range(3 if quick else 9):  # steady state, alternating processes
-            for name, tree in trees.items():
-                res[name]["steady"].append(
-                    _json(["-c", _STEADY, str(tree), record, "60" if quick else "300"]))
+        steady = _steady(trees, record, quick, echo)
+        for name in trees:
+            res[name]["steady"] = steady[name]
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=root,
                        capture_output=True)
@@ -118,6 +159,7 @@ def run(quick: bool, echo=print) -> dict:
     now, old = res["now"], res["baseline"]
     out = {
         "baseline_commit": BASELINE_COMMIT, "rounds": rounds, "raw": res,
+        "steady_pairs": 2 if quick else PAIRS,
         "cold": {"now": min(x["wall"] for x in now["cold"]),
                  "baseline": min(x["wall"] for x in old["cold"])},
         "simulate": {"now": statistics.median(now["simulate"]),
@@ -134,7 +176,8 @@ def run(quick: bool, echo=print) -> dict:
         "simulate": out["simulate"]["now"] / out["simulate"]["baseline"],
         "steady": out["steady"]["baseline"] / out["steady"]["now"],
         "steady_median": out["steady"]["baseline_median"] / out["steady"]["now_median"],
-        # each round's pair ran back to back: their ratio cancels the host's slow drifts
+        # each round's two blocks ran back to back on one core: their ratio cancels the
+        # host's drifts
         "steady_rounds": statistics.median(
             b["median"] / n["median"] for n, b in zip(now["steady"], old["steady"],
                                                       strict=True)),
@@ -163,6 +206,9 @@ def targets(d: dict) -> list[list[str]]:
 
 def render(d: dict) -> list[str]:
     c, s, t, ref = d["cold"], d["simulate"], d["steady"], d["reference"]
+    n_rounds = len(d["raw"]["now"]["steady"])
+    n_pairs = d.get("steady_pairs", 1)
+    n_rounds //= n_pairs
     rows = [
         ["cold first analysis (empty numba cache, fresh process) [s]", f"{c['now']:.1f}",
          f"{c['baseline']:.1f}", f"{d['ratios']['cold']:.3f}"],
@@ -175,14 +221,18 @@ def render(d: dict) -> list[str]:
     ]
     if "steady_rounds" in d["ratios"]:
         rows.append(["benchmark analysis, median over rounds of the per-round speed ratio "
-                     "(each round's two processes back to back)", "", "",
+                     "(each round's two blocks back to back on one core)", "", "",
                      f"{d['ratios']['steady_rounds']:.3f} (speed)"])
     return [
         f"Measured side by side in one run against the kernel at commit "
         f"`{d['baseline_commit']}` (checked out into a temporary worktree): cold first "
         f"analyses alternating ({d['rounds']} each, the minimum), warm `urmx simulate` "
-        f"alternating (median), steady state in alternating fresh processes (minimum and "
-        f"median of 300 analyses each).",
+        f"alternating (median); steady state: {n_pairs} pairs of long-lived processes (one "
+        f"per kernel, both pinned to the same core, a pair per core in turn), each pair "
+        f"running {n_rounds} rounds of a block of {BLOCK} analyses per kernel, back to back "
+        f"in alternating order; the minimum over all analyses, the median of the block "
+        f"medians, and the median over rounds of the ratio of the round's two block "
+        f"medians.",
         "",
         *table(["", "now", d["baseline_commit"], "ratio"], rows),
         "",

@@ -280,7 +280,31 @@ CHOICES = [
         ["the loop behind a numba-compiled wrapper (tried, not taken)",
          "14-18 s", "2-4 % slower (the loop optimised a second time in the wrapper's module)",
          "-"],
+        ["the work arrays as views into one 64-byte-aligned buffer instead of one allocation "
+         "each (tried, not taken)", "-",
+         "no gain (paired 1.011-1.017, minima 0.986-1.000 against the separate arrays)", "-"],
+        ["the peak trackers' end values and the test for an interior extremum without a "
+         "branch per tracker (tried, not taken)", "-", "no gain (paired 0.988, minima 0.965)",
+         "-"],
+        ["the Taylor series inlined at its four call sites (tried, not taken)", "17 s",
+         "slower (paired 0.960, minima 0.977)", "-"],
+        ["`NUMBA_OPT=2`; the loop and SLP vectorisers off (tried, not taken)", "15-17 s",
+         "slower (paired 0.955 and 0.950)", "-"],
     ]),
+    "",
+    "Where the steady state loses on a busy host. On a quiet core the loop is as fast as "
+    "the kernel at `0615fbe` (the minima within 4 % in every run this day, equal in the "
+    "committed one), but its medians fall 5-10 % behind when the host is busy. Counted by "
+    "valgrind's cachegrind (both kernels compiled "
+    "for the CPU valgrind presents, haswell, and the analysis counted as the difference of "
+    "21 and 1 analyses in one process), the loop executes fewer instructions than the "
+    "earlier kernel (7.04 M per analysis against 7.83 M; data references 3.47 M against "
+    "3.60 M; L1 data misses 3.2 k against 3.4 k) but misses the L1 instruction cache 50 % "
+    "more often (19.2 k against 12.8 k per analysis). The loop and its helpers are 75 KB of "
+    "code (the earlier kernel's size was not measured). An instruction-cache miss costs "
+    "little on a quiet core and more when another tenant fills the shared caches, which is "
+    "the likely reason the medians lag: the lever is the loop's code size, not its "
+    "arithmetic. None of the choices tried above made it faster.",
     "",
     "A warm `urmx simulate` no longer imports numba: before, every process paid importing "
     "numba (0.15-0.35 s here) and numba's refresh of its target context when it loads the "

@@ -290,6 +290,9 @@ CHOICES = [
          "slower (paired 0.960, minima 0.977)", "-"],
         ["`NUMBA_OPT=2`; the loop and SLP vectorisers off (tried, not taken)", "15-17 s",
          "slower (paired 0.955 and 0.950)", "-"],
+        ["the tracker, propagator and event-row helpers on padded loops only (one copy "
+         "each instead of an n = 2 and a padded one: 119 KB of object code against 122 KB; "
+         "tried, not taken)", "17 s", "8 % slower (paired 0.921, minima 0.926)", "-"],
     ]),
     "",
     "Where the steady state loses on a busy host. On a quiet core the loop is as fast as "
@@ -303,8 +306,9 @@ CHOICES = [
     "more often (19.2 k against 12.8 k per analysis). The loop and its helpers are 75 KB of "
     "code (the earlier kernel's size was not measured). An instruction-cache miss costs "
     "little on a quiet core and more when another tenant fills the shared caches, which is "
-    "the likely reason the medians lag: the lever is the loop's code size, not its "
-    "arithmetic. None of the choices tried above made it faster.",
+    "the likely reason the medians lag: the lever is the loop's code size more than its "
+    "arithmetic, but shrinking the code by giving up the n = 2 loops cost more than it "
+    "saved. None of the choices tried above made it faster.",
     "",
     "A warm `urmx simulate` no longer imports numba: before, every process paid importing "
     "numba (0.15-0.35 s here) and numba's refresh of its target context when it loads the "

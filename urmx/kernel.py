@@ -314,7 +314,7 @@ def _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt):
     return k
 
 
-@inner
+@inline
 def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt):
     """The event functions of the current piece, ``e = sig*(rows.y + vrows.y_d +
     agc*xg_dd) + kap`` (an event when e falls through zero); returns how many.
@@ -496,7 +496,7 @@ def _reset_other(ist, which):
         ist[I_S] = -ist[I_C]
 
 
-@inner
+@inline
 def handle_event(P, GL, GX, GMI, GROT, ist, kd, target, r, v, cor, law, window, ag_now, MK,
                  MC, MR, MG, v_rest, counts, tmp):
     """Carry out one event at the current state (shared by both solvers; padded arrays).

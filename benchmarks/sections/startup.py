@@ -302,12 +302,12 @@ CHOICES = [
          "tried, not taken)", "17 s", "8 % slower (paired 0.921, minima 0.926)", "-"],
     ]),
     "",
-    "Where the steady state loses on a busy host. On a quiet core the loop is as fast as "
-    "the kernel at `0615fbe` (the minima within 5 % in every run this day, equal in the "
-    "committed one), but its medians fell 5-10 % behind when the host is busy. At "
-    "`8b1e74c` (before the event path was inlined, in the table above), counted by "
-    "valgrind's cachegrind (both kernels compiled for the CPU valgrind presents, haswell, "
-    "through `NUMBA_CPU_NAME`/`NUMBA_CPU_FEATURES`; one analysis counted as the difference "
+    "Where the steady state lost on a busy host. Before the event path was inlined (at "
+    "`8b1e74c`), the loop was as fast as the kernel at `0615fbe` on a quiet core (the "
+    "minima within 5 % in every run that day), but its medians fell 5-10 % behind when the "
+    "host was busy. Counted by valgrind's cachegrind (both kernels compiled for the CPU "
+    "valgrind presents, haswell, through `NUMBA_CPU_NAME`/`NUMBA_CPU_FEATURES`; one "
+    "analysis counted as the difference "
     "between 81 and 1 analyses in one process, `PYTHONHASHSEED=0`, two runs each), the loop "
     "executed 7-11 % more instructions than the earlier kernel (7.03-7.05 M per analysis "
     "against 6.32-6.57 M; data references 3.46 M against 3.37-3.41 M; L1 data misses "
@@ -318,11 +318,11 @@ CHOICES = [
     "the event handler 0.18 M. Both excesses likely come from the held joints' generality spread "
     "over the event path (release rows, held-state geometry) and from more code (75 KB of "
     "loop and helpers); an instruction-cache miss costs little on a quiet core and more "
-    "when another tenant fills the shared caches, the likely reason why the medians lag "
+    "when another tenant fills the shared caches, the likely reason why the medians lagged "
     "more than the minima. Shrinking the code by giving up the n = 2 loops cost more than "
     "it saved. Inlining the event set-up and handler brought the data references to "
     "3.17 M (below the earlier kernel's), the instruction misses to 15.8 k and the "
-    "instructions to 6.99 M (still 6-11 % more).",
+    "instructions to 6.99 M (still 6-11 % more); the run above meets the target with it.",
     "",
     "A warm `urmx simulate` no longer imports numba: before, every process paid importing "
     "numba (0.15-0.35 s here) and numba's refresh of its target context when it loads the "

@@ -306,3 +306,14 @@ def test_startup_steady_verdict_fails_on_a_slower_kernel():
     assert "2 pairs of long-lived processes" in text and "3 rounds of a block of 20" in text
     assert "| benchmark analysis, steady state, median [ms] | 0.560 | 0.560 | 1.000 (speed) |" \
         in text
+
+
+def test_startup_steady_reports_a_process_that_dies(monkeypatch, tmp_path):
+    """A steady-state process that ends mid-run is named with its exit status, instead of
+    a JSON error on the empty line it leaves."""
+    monkeypatch.setattr(startup, "_STEADY", 'print("ready", flush=True)\nraise SystemExit(3)')
+    with pytest.raises(RuntimeError, match=r"process of now ended early \(exit 3\)"):
+        startup._steady({"now": tmp_path, "baseline": tmp_path}, "none", True, print)
+    monkeypatch.setattr(startup, "_STEADY", "raise SystemExit(1)")
+    with pytest.raises(RuntimeError, match="did not start"):
+        startup._steady({"now": tmp_path, "baseline": tmp_path}, "none", True, print)

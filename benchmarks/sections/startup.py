@@ -89,7 +89,11 @@ def _steady(trees: dict, record: str, quick: bool, echo) -> dict:
                 for name in (names if r % 2 == 0 else names[::-1]):
                     procs[name].stdin.write(f"{BLOCK}\n")
                     procs[name].stdin.flush()
-                    out[name].append(json.loads(procs[name].stdout.readline()))
+                    line = procs[name].stdout.readline()
+                    if not line:  # (its traceback is on stderr)
+                        raise RuntimeError(f"the steady-state process of {name} ended "
+                                           f"early (exit {procs[name].wait(timeout=60)})")
+                    out[name].append(json.loads(line))
         finally:
             for proc in procs.values():
                 proc.stdin.close()
@@ -206,9 +210,8 @@ def targets(d: dict) -> list[list[str]]:
 
 def render(d: dict) -> list[str]:
     c, s, t, ref = d["cold"], d["simulate"], d["steady"], d["reference"]
-    n_rounds = len(d["raw"]["now"]["steady"])
     n_pairs = d.get("steady_pairs", 1)
-    n_rounds //= n_pairs
+    n_rounds = len(d["raw"]["now"]["steady"]) // n_pairs
     rows = [
         ["cold first analysis (empty numba cache, fresh process) [s]", f"{c['now']:.1f}",
          f"{c['baseline']:.1f}", f"{d['ratios']['cold']:.3f}"],

@@ -70,8 +70,9 @@ def _range_problem(name: str, value: Any) -> str | None:
     lo, hi, unit = WALL_RANGES[name]
     if lo <= value <= hi:
         return None
-    hint = next((f" (in {other}? {value:g} {other} is {value * f:g} {unit})"
-                 for other, f in _OTHER_UNITS[unit] if lo <= value * f <= hi), "")
+    fits = [f"in {other}? {value:g} {other} is {value * f:g} {unit}"
+            for other, f in _OTHER_UNITS[unit] if lo <= value * f <= hi]
+    hint = f" ({'; '.join(fits)})" if fits else ""
     zero = " (or 0: no diaphragm)" if name.endswith("_mass") and name != "mass" else ""
     rigid = ' (or "rigid")' if name.endswith("_stiffness") else ""
     return (f"Wall {name}={value:g} {unit} lies outside the plausible {lo:g}-{hi:g} "

@@ -565,7 +565,8 @@ def _text_encoding(head: bytes) -> str | None:
             return "utf-16-be"
     if head.startswith(codecs.BOM_UTF8):
         return "utf-8-sig"
-    return None if b"\x00" in head else "latin-1"
+    controls = sum(head.count(bytes([c])) for c in range(32) if c not in b"\t\n\v\f\r\x1a")
+    return None if controls > 0.05 * len(head) else "latin-1"
 
 
 def _decode(raw: bytes, encoding: str) -> str:

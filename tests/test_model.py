@@ -269,8 +269,9 @@ def test_every_shipped_and_tested_wall_is_plausible(tmp_path):
     on every diaphragm) and the seeded random walls of the start-rule tests."""
     from pathlib import Path
 
-    from tests.fixtures.random_cases import random_wall
     from urmx.catalog import load_catalog, read_wall
+
+    from .fixtures.random_cases import random_wall
 
     cat = load_catalog()
     assert all(not spec.wall.allow_unusual for spec in cat.walls.values())

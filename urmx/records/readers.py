@@ -1085,10 +1085,13 @@ def _parse_columns(path: Path, lines: list[str]) -> list[_Channel]:
 
 
 def _time_like(steps: np.ndarray) -> bool:
-    """Whether a first column with these differences is a time column: nearly all its
-    steps (duplicates and reversals aside) within half of the median step, which is not
-    zero; acceleration values in pairs jump about instead."""
+    """Whether a first column with these differences is a time column: it increases
+    throughout (however unevenly), or nearly all its steps (a duplicate or reversal aside)
+    lie within half of the median step, which is not zero; acceleration values in pairs
+    go up and down instead."""
     with np.errstate(invalid="ignore"):
+        if np.all(steps > 0):
+            return True
         med = float(np.median(steps))
         return med != 0.0 and bool(np.mean(np.abs(steps - med) <= 0.5 * abs(med)) >= 0.9)
 

@@ -434,6 +434,10 @@ def suite(records_dir, tmp_path) -> Path:
     shutil.copy(records_dir / "elcentro1940/elcentro_S00E_1940.dat",
                 folder / "plain" / "elcentro.dat")  # an id of records/manifest.toml
     (folder / "README.md").write_text("My suite\n")
+    from obspy import Trace
+
+    sac = Trace(300.0 * np.sin(np.arange(1000) * 0.05), header={"delta": 0.01})
+    sac.write(str(folder / "plain" / "shake.sac"), format="SAC")  # an ObsPy format, in cm/s2
     return folder
 
 
@@ -442,16 +446,18 @@ def test_index_a_folder_and_load_every_id(suite, capsys, monkeypatch):
                  "--unit", "cm/s2"]) == 2  # README.md matches the explicit pattern
     assert "README.md: unknown record format" in capsys.readouterr().err
     assert main(["records", "index", str(suite), "--dt", "0.02", "--unit", "cm/s2",
-                 "--pattern", "**/*.[AVd]*"]) == 0
+                 "--pattern", "**/*.[AVds]*"]) == 0
     out = capsys.readouterr().out
-    assert f"wrote {suite / 'manifest.toml'} (9 records)" in out
+    assert f"wrote {suite / 'manifest.toml'} (10 records)" in out
     entries = R.manifest(suite)  # the folder's manifest.toml joins the checkout's
     own = {k: e for k, e in entries.items() if e["set"] == "own"}
     assert sorted(own) == [
         "20161113-110259-wtmc-20-v1a-n28w", "20161113-110259-wtmc-20-v1a-s62w",
         "20161113-110259-wtmc-20-v1a-up", "20161113-110259-wtmc-20-v2a-n28w",
         "20161113-110259-wtmc-20-v2a-s62w", "20161113-110259-wtmc-20-v2a-up",
-        "elcentro-s00e-1940", "own-elcentro", "rsn763-lomap-gil067"]
+        "elcentro-s00e-1940", "own-elcentro", "rsn763-lomap-gil067", "shake"]
+    assert (own["shake"]["format"], own["shake"]["dt"], own["shake"]["unit"]) == (
+        "SAC", 0.01, "cm/s2")  # its dt from the file, not --dt
     assert "elcentro" in entries and entries["elcentro"]["set"] == "paper"
     at2 = own["rsn763-lomap-gil067"]
     assert (at2["format"], at2["unit"], at2["dt"], at2["npts"], at2["scale_factor"]) == (
@@ -464,15 +470,15 @@ def test_index_a_folder_and_load_every_id(suite, capsys, monkeypatch):
             own["elcentro-s00e-1940"]["unit"]) == ("plain/elcentro_S00E_1940.dat", 0.02,
                                                    "cm/s2")
     for rid, e in own.items():  # each id loads through the manifest as a direct read does
-        direct = R.read(suite / e["file"], **({} if e["format"] != "columns" else
-                                               {"dt": 0.02, "unit": "cm/s2"}),
+        given = {"columns": {"dt": 0.02, "unit": "cm/s2"}, "SAC": {"unit": "cm/s2"}}
+        direct = R.read(suite / e["file"], **given.get(e["format"], {}),
                         channel=e.get("channel"))[0]
         loaded = R.load(rid, suite)
         np.testing.assert_array_equal(loaded.data, direct.data)
         assert loaded.stats.delta == direct.stats.delta
     monkeypatch.setenv("URMX_RECORDS", str(suite))
     assert main(["records", "list", "--set", "own"]) == 0
-    assert capsys.readouterr().out.count("\n") == 1 + 9
+    assert capsys.readouterr().out.count("\n") == 1 + 10
     (suite / "plain" / "elcentro.dat").write_text("1\n2\n")  # edited since: refused
     with pytest.raises(R.ChecksumError, match="own-elcentro"):
         R.load("own-elcentro", suite)

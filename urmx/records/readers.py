@@ -70,8 +70,6 @@ DT_RANGE = (1e-4, 0.1)
 #: cm/s2 or mm/s2 label, above 10 g cm/s2 or mm/s2 under a g or m/s2 label; outside, a
 #: record is refused unless ``allow_unusual=True``
 PGA_RANGE_G = (1e-3, 10.0)
-#: largest believable peak ground acceleration [g]
-MAX_PLAUSIBLE_PGA_G = PGA_RANGE_G[1]
 #: largest record file read [bytes]: a strong-motion record takes a few MB at most
 MAX_RECORD_BYTES = 256 * 2**20
 #: bytes read to decide a file's format (never the whole file)

@@ -55,6 +55,7 @@ def files(tmp_path_factory) -> dict[str, Path]:
     put("wall_crack.toml", WALL.replace("0.6667", "1.5"))
     put("wall_typo.toml", WALL.replace("height", "heigth"))
     put("wall_badtoml.toml", "thickness = = 0.23\n")
+    put("wall_mm.toml", WALL.replace("0.23", "230"))
     put("study_damp50.toml", STUDY.format(rec="elcentro", cor="[0.8]", extra="")
         .replace('["s18"]', '["mine"]') + "\n[walls.mine]\nthickness = 0.23\nheight = 4.14\n"
         "crack_ratio = 0.6667\nmass = 3000.0\ntop_damping = 50\n")
@@ -94,6 +95,10 @@ CLI = [
     ("sim-cor-zero", "simulate {wall} {at2} --cor 0", "cor=0.0"),
     ("sim-tail", "simulate {wall} {at2} --tail -1", "tail=-1.0"),
     ("sim-scale-nan", "simulate {wall} {at2} --scale nan", "scale=nan"),
+    ("sim-scale-negative", "simulate {wall} {at2} --scale -1", "scale=-1.0 must be a positive"),
+    ("sim-scale-zero", "simulate {wall} {at2} --scale 0", "scale=0.0 must be a positive"),
+    ("sim-wall-millimetres", "simulate {wall_mm} {at2}", "thickness=230 m lies outside the "
+     "plausible 0.02-2 m (in millimetres? 230 millimetres is 0.23 m)"),
     ("sim-record", "simulate {wall} nosuchrecord", "'nosuchrecord'"),
     ("sim-wall-missing", "simulate {tmp}/missing.toml {at2}", "missing.toml"),
     ("sim-damping-50", "simulate {wall_damp50} {at2}", "top_damping=50"),
@@ -257,6 +262,13 @@ API = [
     ("records-dir", lambda f: _records_dir(f["tmp"] / "nope"), E.MissingFileError, "nope"),
     ("read-wall-damping", lambda f: urmx.catalog.read_wall(f["wall_damp50"]),
      CatalogError, "top_damping=50"),
+    ("wall-unknown-field", lambda f: urmx.Wall(thickness=0.23, height=4.14, crack_ratio=0.5,
+                                                mass=3000.0, crack_height=2.76),
+     E.InputError, "Wall has no field 'crack_height' (did you mean"),
+    ("wall-missing-field", lambda f: urmx.Wall(thickness=0.23, height=4.14),
+     E.InputError, "Wall needs crack_ratio, mass"),
+    ("wall-millimetres", lambda f: urmx.Wall(thickness=350, height=4.14, crack_ratio=0.5,
+                                              mass=3000.0), E.InputError, "in millimetres?"),
     ("capacity-im", lambda f: F.collapse_capacity(_wall(), (np.ones(10), 0.01), im="sa"),
      E.InputError, "'sa'"),
     ("capacity-record-dt", lambda f: F.collapse_capacity(_wall(), (np.ones(10), -0.01)),
@@ -332,3 +344,39 @@ def test_simulate_takes_a_record_id_or_file(records_dir):
     assert by_id.attrs["dt"] == tr.stats.delta == 0.02
     for name in ("peak_top_displacement", "instability_ratio", "base_impacts"):
         assert float(by_id[name]) == float(by_trace[name])
+
+
+def test_simulate_runs_an_unusual_wall_on_purpose(files, capsys):
+    """`--allow-unusual` is the documented way to run a wall outside the plausible ranges."""
+    assert main(["simulate", str(files["wall_mm"]), str(files["at2"]), "--allow-unusual"]) == 0
+    assert "status" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("text", "needle"), [
+    ("records_dir = = 1\n", "urmx.toml: not valid TOML: Invalid value (at line 1, column 15)"),
+    ("records_dir = 42\n", "urmx.toml: records_dir = 42 must be a folder path in quotes"),
+    ("records_dir = ''\n", "urmx.toml: records_dir = '' must be a folder path in quotes"),
+])
+def test_bad_urmx_toml_is_one_line(tmp_path, monkeypatch, capsys, text, needle):
+    """An invalid urmx.toml (TOMLDecodeError) or records_dir = 42 (TypeError) in the working
+    folder were tracebacks."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("URMX_RECORDS", raising=False)
+    (tmp_path / "urmx.toml").write_text(text)
+    with pytest.raises(E.InputError) as err:
+        _records_dir()
+    assert needle in str(err.value) and str(tmp_path / "urmx.toml") in str(err.value)
+    code, out = _cli(["records", "show", "elcentro"], capsys)
+    assert code == 2 and out.count("\n") == 1 and needle in out
+
+
+def test_urmx_toml_without_records_dir_says_so(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("URMX_RECORDS", raising=False)
+    (tmp_path / "urmx.toml").write_text('record_dir = "/data/records"\n')
+    with pytest.raises(E.MissingFileError, match="urmx.toml has no records_dir \\(it has "
+                                                  "'record_dir': a misspelling\\?\\)"):
+        _records_dir()
+    (tmp_path / "records").mkdir()
+    (tmp_path / "urmx.toml").write_text('records_dir = "records"\n')
+    assert _records_dir() == tmp_path / "records"

@@ -8,7 +8,15 @@ import numpy as np
 import pytest
 
 from urmx import Wall
-from urmx.model import PAPER_G, full_mass, system, transform
+from urmx.errors import InputError
+from urmx.model import (
+    EFFECTIVE_MASS,
+    PAPER_G,
+    allow_unusual_walls,
+    full_mass,
+    system,
+    transform,
+)
 
 # ---- the paper's Table II walls (nominal masses, MODEL.md section 2) ------------------
 TABLE_II = {
@@ -178,6 +186,158 @@ def test_wall_accepts_edges_and_rigid_spellings():
     assert w.bottom_rigid and w.bottom_stiffness == "rigid" and not w.top_rigid
     assert w.a1 == pytest.approx(2.76, rel=1e-15) and w.a2 == pytest.approx(1.38, rel=1e-14)
     assert w.replace(pmr=50.0).segment(1).Mi == pytest.approx(0.45 * w.segment(1).M0)
+
+
+# ---- unknown fields and implausible values (issues 22 and 25) ----------------------------
+
+
+def test_wall_call_errors_are_input_errors_listing_the_fields():
+    """`Wall(crack_height=...)` was a TypeError although every bad field is an InputError."""
+    with pytest.raises(InputError) as err:
+        Wall(**GOOD, crack_height=2.76)
+    assert "Wall has no field 'crack_height'" in str(err.value)
+    assert "its fields: thickness, height, crack_ratio, mass, bottom_mass" in str(err.value)
+    with pytest.raises(InputError, match="Wall needs crack_ratio, mass"):
+        Wall(0.23, 4.14)
+    with pytest.raises(InputError, match="Wall height is given twice"):
+        Wall(0.23, 4.14, 0.5, 3000.0, height=4.0)
+    with pytest.raises(InputError, match="at most 12 values by position"):
+        Wall(*range(1, 14))
+    assert Wall(0.23, 4.14, 2 / 3, 30000.0) == Wall(**{k: GOOD[k] for k in
+                                                      ("thickness", "height", "crack_ratio",
+                                                       "mass")})
+
+
+@pytest.mark.parametrize(("field", "value", "needle"), [
+    ("thickness", 350.0, "thickness=350 m lies outside the plausible 0.02-2 m (in millimetres? "
+                         "350 millimetres is 0.35 m)"),
+    ("thickness", 23.0, "(in millimetres? 23 millimetres is 0.023 m; in centimetres? 23 "
+                        "centimetres is 0.23 m)"),
+    ("thickness", 1e-6, "thickness=1e-06 m lies outside the plausible 0.02-2 m: give SI"),
+    ("thickness", 1e5, "thickness=100000 m lies outside"),
+    ("height", 5200.0, "height=5200 m lies outside the plausible 0.2-30 m (in millimetres? "
+                       "5200 millimetres is 5.2 m)"),
+    ("height", 1e5, "height=100000 m lies outside the plausible 0.2-30 m: give SI"),
+    ("mass", 1e-20, "mass=1e-20 kg lies outside the plausible 1-1e+07 kg: give SI"),
+    ("mass", 3.0e9, "(in grams? 3e+09 grams is 3e+06 kg)"),
+    ("top_mass", 1e-20, "top_mass=1e-20 kg lies outside the plausible 1-1e+08 kg (or 0: no "
+                        "diaphragm)"),
+    ("top_stiffness", 1e30, 'top_stiffness=1e+30 N m-1 lies outside the plausible 100-1e+12 '
+                            'N m-1 (or "rigid")'),
+    ("bottom_stiffness", 1.0, "bottom_stiffness=1 N m-1 lies outside"),
+])
+def test_wall_outside_plausible_ranges_names_range_and_unit(field, value, needle):
+    with pytest.raises(InputError) as err:
+        Wall(**{**GOOD, field: value})
+    assert needle in str(err.value)
+    assert "allow_unusual=True (--allow-unusual) to run it on purpose" in str(err.value)
+    w = Wall(**{**GOOD, field: value}, allow_unusual=True)  # on purpose
+    assert getattr(w, field) == value and w.to_dict()["allow_unusual"] is True
+    assert w.replace(pmr=70.0).allow_unusual  # kept by replace
+    with pytest.raises(InputError, match="must be true or false"):
+        Wall(**GOOD, allow_unusual="yes")
+
+
+def test_ordinary_wall_dict_is_unchanged():
+    """`to_dict()` keys saved study batches: an ordinary wall's dict is what it was."""
+    assert Wall(**GOOD).to_dict() == {
+        "thickness": 0.23, "height": 4.14, "crack_ratio": 2 / 3, "mass": 30000.0,
+        "bottom_mass": 0.0, "top_mass": 20000.0, "bottom_stiffness": "rigid",
+        "top_stiffness": 815e3, "bottom_damping": 0.0, "top_damping": 0.12, "pmr": 75.0,
+        "kappa": 0.04}
+    with allow_unusual_walls():  # the CLI's --allow-unusual marks only unusual walls
+        assert "allow_unusual" not in Wall(**GOOD).to_dict()
+        assert Wall(**{**GOOD, "thickness": 350.0}).allow_unusual
+    with pytest.raises(InputError):
+        Wall(**{**GOOD, "thickness": 350.0})
+
+
+def _study_of_every_diaphragm(tmp_path):
+    """A study of every parametric wall on every catalog diaphragm, single and higher storey."""
+    from urmx.catalog import load_catalog, load_study
+
+    ids = list(load_catalog().diaphragms)
+    labels = ", ".join(f'"{d}/{s}"' for d in ids for s in ("top", "both"))
+    path = tmp_path / "every.toml"
+    path.write_text(f'[study]\nname = "every"\nwalls = "parametric"\ndiaphragms = [{labels}]\n'
+                    'records = ["elcentro"]\ncor = [0.8]\n')
+    return load_study(path), ids
+
+
+def test_every_shipped_and_tested_wall_is_plausible(tmp_path):
+    """The ranges accept every wall of catalog/ (walls.toml, examples/, the parametric walls
+    on every diaphragm) and the seeded random walls of the start-rule tests."""
+    from pathlib import Path
+
+    from urmx.catalog import load_catalog, read_wall
+
+    from .fixtures.random_cases import random_wall
+
+    cat = load_catalog()
+    assert all(not spec.wall.allow_unusual for spec in cat.walls.values())
+    examples = sorted((Path(__file__).parent.parent / "catalog" / "examples").glob("*.toml"))
+    assert len(examples) == 4 and all(not read_wall(p).allow_unusual for p in examples)
+    study, ids = _study_of_every_diaphragm(tmp_path)
+    walls = [study.wall(spec, d) for spec in study.walls for d in study.diaphragms]
+    assert len(walls) == 9 * len(ids) * 2 and not any(w.allow_unusual for w in walls)
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        w = random_wall(rng, top_stiffness=1e9, bottom_stiffness=1e9)
+        assert not w.allow_unusual and w.top_mass == 0.0
+
+
+def test_in_building_is_bitwise_the_catalog_wall(tmp_path):
+    """Wall.in_building gives exactly the catalog's parametric walls on D1-D5 (and
+    D5-pinned), single storey (top) and between two diaphragms (both)."""
+    from urmx import catalog
+
+    assert EFFECTIVE_MASS == catalog.EFFECTIVE_MASS
+    study, ids = _study_of_every_diaphragm(tmp_path)
+    b = study.catalog.building
+    n = 0
+    for spec in study.walls:
+        for d in study.diaphragms:
+            w = spec.wall
+            built = Wall.in_building(
+                thickness=w.thickness, height=w.height, crack_ratio=w.crack_ratio, pmr=w.pmr,
+                kappa=w.kappa, density=b.density, wall_length=b.wall_length,
+                diaphragm_weight=b.diaphragm_weight, plan_area=b.plan_area,
+                diaphragm_stiffness=d.stiffness, damping=d.damping,
+                supports=study.supports_of(d))
+            expected = study.wall(spec, d).to_dict()
+            assert built.to_dict() == expected and repr(built.to_dict()) == repr(expected)
+            n += 1
+    assert n == 9 * len(ids) * 2 and {"D1", "D5", "D5-pinned"} <= set(ids)
+
+
+def test_in_building_from_a_diaphragm_frequency():
+    kw = dict(thickness=0.23, height=4.14, crack_ratio=2 / 3, density=1800.0,
+              wall_length=12.51, diaphragm_weight=0.455, plan_area=17.4 * 29.9)
+    by_k = Wall.in_building(**kw, diaphragm_stiffness=815e3, supports="both")
+    by_f = Wall.in_building(**kw, diaphragm_frequency=by_k.diaphragm_frequency("top"),
+                            supports="both")
+    assert by_f.top_stiffness == pytest.approx(815e3, rel=1e-12)
+    assert by_f.bottom_stiffness == by_f.top_stiffness
+    assert by_f.diaphragm_frequency("bottom") == pytest.approx(
+        by_k.diaphragm_frequency("top"), rel=1e-12)
+    # Eq. 7 by hand: 8/15 of both out-of-plane walls and of the diaphragm's weight over g
+    assert by_k.mass == pytest.approx(8 / 15 * 2 * 1800.0 * 0.23 * 4.14 * 12.51, rel=1e-14)
+    assert by_k.top_mass == pytest.approx(8 / 15 * 455.0 * 17.4 * 29.9 / PAPER_G, rel=1e-14)
+    assert (by_k.top_damping, by_k.bottom_damping) == (0.12, 0.12)
+    top = Wall.in_building(**kw, diaphragm_frequency=5.0)
+    assert top.bottom_rigid and top.bottom_mass == 0.0
+    assert top.diaphragm_frequency() == pytest.approx(5.0, rel=1e-12)
+    pinned = Wall.in_building(**kw, diaphragm_stiffness="rigid")
+    assert pinned.top_rigid and pinned.top_damping == 0.0
+    for bad, needle in ((dict(diaphragm_stiffness=1e6, diaphragm_frequency=5.0), "exactly one"),
+                        ({}, "exactly one"),
+                        (dict(diaphragm_frequency=-5.0), "diaphragm_frequency=-5.0"),
+                        (dict(diaphragm_frequency=5.0, supports="bottom"), "'bottom'"),
+                        (dict(diaphragm_frequency=5.0, density=0.0), "density=0.0")):
+        with pytest.raises(InputError, match=needle):
+            Wall.in_building(**{**kw, **bad})
+    with pytest.raises(InputError, match="thickness=230 m .*in millimetres"):
+        Wall.in_building(**{**kw, "thickness": 230.0}, diaphragm_frequency=5.0)
 
 
 # ---- matrices (MODEL.md sections 5-6) -----------------------------------------------

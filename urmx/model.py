@@ -12,8 +12,12 @@ a rigid support removes a degree of freedom through ``q = T r`` (section 6).
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import difflib
+import functools
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import MISSING, asdict, dataclass, field, fields
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -24,6 +28,56 @@ from .jitcache import jit
 PAPER_G = 9.81  # m s-2, the paper's gravity (Table III; MODEL.md section 1); not standard
 # gravity (urmx.records.STANDARD_GRAVITY = 9.80665, for records given in g)
 RIGID = "rigid"
+EFFECTIVE_MASS = 8.0 / 15.0  # Eq. 7: effective over nominal mass of building walls and diaphragms
+
+#: plausible values of a wall (low, high, SI unit): a wall outside them is refused (its
+#: numbers are nearly always in another unit: a thickness of 350 is millimetres) unless it
+#: is built with ``allow_unusual=True``; a diaphragm mass may also be 0 (none) and a
+#: stiffness "rigid"
+WALL_RANGES = {
+    "thickness": (0.02, 2.0, "m"),
+    "height": (0.2, 30.0, "m"),
+    "mass": (1.0, 1e7, "kg"),
+    "bottom_mass": (1.0, 1e8, "kg"),
+    "top_mass": (1.0, 1e8, "kg"),
+    "bottom_stiffness": (1e2, 1e12, "N m-1"),
+    "top_stiffness": (1e2, 1e12, "N m-1"),
+}
+# units a value out of range may have been given in: (name, factor to the SI unit)
+_OTHER_UNITS = {"m": (("millimetres", 1e-3), ("centimetres", 1e-2)),
+                "kg": (("grams", 1e-3), ("tonnes", 1e3)),
+                "N m-1": (("kN/m", 1e3),)}
+_ALLOW_UNUSUAL = contextvars.ContextVar("urmx_allow_unusual_walls", default=False)
+
+
+@contextlib.contextmanager
+def allow_unusual_walls():
+    """Within this block every `Wall` is built as with ``allow_unusual=True`` (the
+    command line's ``--allow-unusual``): values outside `WALL_RANGES` are accepted, and
+    the walls that have such values keep ``allow_unusual=True``."""
+    token = _ALLOW_UNUSUAL.set(True)
+    try:
+        yield
+    finally:
+        _ALLOW_UNUSUAL.reset(token)
+
+
+def _range_problem(name: str, value: Any) -> str | None:
+    """Why a wall value lies outside `WALL_RANGES` (with the unit it was likely given
+    in), or None."""
+    if name not in WALL_RANGES or _is_rigid(value) or (value == 0.0 and name.endswith("_mass")):
+        return None
+    lo, hi, unit = WALL_RANGES[name]
+    if lo <= value <= hi:
+        return None
+    fits = [f"in {other}? {value:g} {other} is {value * f:g} {unit}"
+            for other, f in _OTHER_UNITS[unit] if lo <= value * f <= hi]
+    hint = f" ({'; '.join(fits)})" if fits else ""
+    zero = " (or 0: no diaphragm)" if name.endswith("_mass") and name != "mass" else ""
+    rigid = ' (or "rigid")' if name.endswith("_stiffness") else ""
+    return (f"Wall {name}={value:g} {unit} lies outside the plausible {lo:g}-{hi:g} "
+            f"{unit}{zero}{rigid}{hint}: give SI units, or build the wall with "
+            "allow_unusual=True (--allow-unusual) to run it on purpose")
 
 # ---- layout of the parameter vector ------------------------------------------------
 P_B, P_H, P_A1, P_A2, P_M1, P_M2, P_MDB, P_MDT = range(8)
@@ -71,6 +125,17 @@ class Wall:
         Percentage of maximum rigid resistance, in (0, 100]. [%]
     kappa : float
         theta_a / theta0 of the trilinear curve. [1]
+    allow_unusual : bool, keyword only
+        Accept values outside `WALL_RANGES` (a wall of 1 um or 100 km, a thickness of
+        350 that is surely millimetres), which are refused otherwise. Left out of
+        :meth:`to_dict` (and so of study keys) while False.
+
+    Raises
+    ------
+    urmx.errors.InputError
+        A field that is missing, unknown (the message lists the fields), not a number,
+        out of its range (with the range and the unit it was likely given in), or a pmr
+        and kappa that leave no plateau.
     """
 
     thickness: float
@@ -85,6 +150,7 @@ class Wall:
     top_damping: float = 0.0
     pmr: float = 75.0
     kappa: float = 0.04
+    allow_unusual: bool = field(default=False, kw_only=True, repr=False, compare=False)
     _params: np.ndarray = field(init=False, repr=False, compare=False, hash=False)
 
     def __post_init__(self) -> None:
@@ -116,6 +182,13 @@ class Wall:
                                  f"(overdamped): give it as a ratio, e.g. 0.12 for 12 %")
         for name in ("bottom_stiffness", "top_stiffness"):
             number(name, positive=True, allow_rigid=True)
+        if not isinstance(self.allow_unusual, bool):
+            raise InputError(f"Wall allow_unusual={self.allow_unusual!r} must be true or false")
+        problems = [p for p in (_range_problem(n, getattr(self, n)) for n in WALL_RANGES) if p]
+        if problems:
+            if not (self.allow_unusual or _ALLOW_UNUSUAL.get()):
+                raise InputError(problems[0])
+            object.__setattr__(self, "allow_unusual", True)  # kept by replace()
         number("crack_ratio", positive=True)
         if not 0.0 < self.crack_ratio < 1.0:
             raise InputError(f"Wall crack_ratio={self.crack_ratio!r} must lie in (0, 1)")
@@ -178,14 +251,135 @@ class Wall:
         return math.sqrt(k / (md + 0.5 * self.mass)) / (2.0 * math.pi)
 
     def to_dict(self) -> dict[str, Any]:
+        """The fields as a dict (``allow_unusual`` only when True: an ordinary wall's dict,
+        which keys saved study batches, is what it always was)."""
         d = asdict(self)
         d.pop("_params", None)
+        if not d["allow_unusual"]:
+            del d["allow_unusual"]
         return d
 
     def replace(self, **changes: Any) -> Wall:
         d = self.to_dict()
         d.update(changes)
         return Wall(**d)
+
+
+    @classmethod
+    def in_building(cls, *, thickness: float, height: float, crack_ratio: float,
+                    density: float, wall_length: float, diaphragm_weight: float,
+                    plan_area: float, diaphragm_stiffness: float | str | None = None,
+                    diaphragm_frequency: float | None = None, supports: str = "top",
+                    damping: float = 0.12, pmr: float = 75.0, kappa: float = 0.04,
+                    allow_unusual: bool = False) -> Wall:
+        """A wall of a building between timber diaphragms, with the effective masses of
+        Eq. 7 (MODEL.md section 2): 8/15 of the two out-of-plane walls' mass and of the
+        diaphragm's seismic weight over g (the catalog's parametric walls, D1-D5).
+
+        Parameters
+        ----------
+        thickness, height : float
+            Wall thickness and storey height. [m]
+        crack_ratio : float
+            Crack height over wall height. [1]
+        density : float
+            Masonry density. [kg m-3]
+        wall_length : float
+            Length of each of the two out-of-plane walls at the diaphragm's ends. [m]
+        diaphragm_weight : float
+            Diaphragm seismic weight per plan area. [kPa]
+        plan_area : float
+            Plan area of the diaphragm. [m2]
+        diaphragm_stiffness : float or "rigid", optional
+            Effective in-plane stiffness of the diaphragm. [N m-1]
+        diaphragm_frequency : float, optional
+            Instead of the stiffness: the diaphragm's indicative frequency as the catalog
+            defines it (Table IV footnote, :meth:`diaphragm_frequency`): stiffness
+            ``(2 pi f)^2 (m_d + m/2)`` with the effective diaphragm and wall masses. [Hz]
+        supports : {"top", "both"}
+            ``"top"``: a single storey, the ground is the rigid bottom support; ``"both"``:
+            a higher storey between two diaphragms alike.
+        damping : float
+            Damping ratio of each flexible diaphragm's dashpot (0 for a rigid one). [1]
+        pmr, kappa, allow_unusual
+            As for `Wall`.
+
+        Returns
+        -------
+        Wall
+            Bitwise the wall the catalog builds for a parametric wall on a diaphragm
+            (`urmx.catalog.Study.wall`).
+        """
+        def positive(name: str, value: Any, zero: bool = False) -> float:
+            ok = isinstance(value, (int, float, np.integer, np.floating)) \
+                and not isinstance(value, bool) and math.isfinite(value) \
+                and (value >= 0.0 if zero else value > 0.0)
+            if not ok:
+                sign = "non-negative" if zero else "positive"
+                raise InputError(f"Wall.in_building {name}={value!r} must be a {sign} number")
+            return float(value)
+
+        density = positive("density", density)
+        wall_length = positive("wall_length", wall_length)
+        diaphragm_weight = positive("diaphragm_weight", diaphragm_weight, zero=True)
+        plan_area = positive("plan_area", plan_area)
+        if supports not in ("top", "both"):
+            raise InputError(f"Wall.in_building supports={supports!r} must be 'top' (single "
+                             "storey, rigid ground below) or 'both' (diaphragms below and above)")
+        if (diaphragm_stiffness is None) == (diaphragm_frequency is None):
+            raise InputError("Wall.in_building: give exactly one of diaphragm_stiffness= "
+                             "[N m-1] and diaphragm_frequency= [Hz]")
+        for name in ("thickness", "height"):
+            positive(name, locals()[name])
+        # Eq. 7, in the catalog's order of operations (bitwise the same masses)
+        mass = EFFECTIVE_MASS * 2.0 * density * thickness * height * wall_length
+        md = EFFECTIVE_MASS * diaphragm_weight * 1e3 * plan_area / PAPER_G
+        if diaphragm_frequency is not None:
+            f = positive("diaphragm_frequency", diaphragm_frequency)
+            k: float | str = (2.0 * math.pi * f) ** 2 * (md + 0.5 * mass)
+        elif _is_rigid(diaphragm_stiffness):
+            k = RIGID
+        else:
+            k = diaphragm_stiffness
+        zeta = 0.0 if _is_rigid(k) else damping
+        bottom = (dict(bottom_stiffness=k, bottom_mass=md, bottom_damping=zeta)
+                  if supports == "both" else
+                  dict(bottom_stiffness=RIGID, bottom_mass=0.0, bottom_damping=0.0))
+        return cls(thickness=thickness, height=height, crack_ratio=crack_ratio, mass=mass,
+                   top_stiffness=k, top_mass=md, top_damping=zeta, pmr=pmr, kappa=kappa,
+                   allow_unusual=allow_unusual, **bottom)
+
+
+_INIT_FIELDS = tuple(f.name for f in fields(Wall) if f.init)
+_POSITIONAL = tuple(f.name for f in fields(Wall) if f.init and not f.kw_only)
+_REQUIRED = tuple(f.name for f in fields(Wall) if f.init and f.default is MISSING
+                  and f.default_factory is MISSING)
+_dataclass_init = Wall.__init__
+
+
+@functools.wraps(_dataclass_init)
+def _checked_init(self, *args, **kwargs):
+    """The dataclass's __init__, after checking the call: an unknown, missing or doubled
+    field is an InputError naming it (and the fields), never a TypeError."""
+    if len(args) > len(_POSITIONAL):
+        raise InputError(f"Wall takes at most {len(_POSITIONAL)} values by position "
+                         f"({', '.join(_POSITIONAL)}), not {len(args)}")
+    unknown = sorted(set(kwargs) - set(_INIT_FIELDS))
+    if unknown:
+        close = difflib.get_close_matches(unknown[0], _INIT_FIELDS, n=2)
+        hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
+        raise InputError(f"Wall has no field {unknown[0]!r}{hint}; its fields: "
+                         f"{', '.join(_INIT_FIELDS)}")
+    twice = [n for n in _POSITIONAL[:len(args)] if n in kwargs]
+    if twice:
+        raise InputError(f"Wall {twice[0]} is given twice (by position and by name)")
+    missing = [n for n in _REQUIRED if n not in kwargs and n not in _POSITIONAL[:len(args)]]
+    if missing:
+        raise InputError(f"Wall needs {', '.join(missing)} (missing)")
+    _dataclass_init(self, *args, **kwargs)
+
+
+Wall.__init__ = _checked_init
 
 
 def _pack(w: Wall) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""``urmx records list|show|plot|report``: the record manifest from the command line."""
+"""``urmx records list|show|plot|index|report``: the record manifest from the command line."""
 
 from __future__ import annotations
 
@@ -12,9 +12,17 @@ def _records_option(p, default) -> None:
                    help="records directory (default $URMX_RECORDS)")
 
 
-def _file_options(s) -> None:
-    s.add_argument("--dt", type=float, help="time step [s] of a record file without one")
-    s.add_argument("--unit", choices=UNITS, help="unit of a record file that does not state it")
+def file_options(s, what: str = "a record file") -> None:
+    """--dt, --unit, --channel and --allow-unusual: how to read a record file (shared by
+    `urmx simulate`)."""
+    s.add_argument("--dt", type=float, help=f"time step [s] of {what} without one")
+    s.add_argument("--unit", choices=UNITS, help=f"unit of {what} that does not state it")
+    s.add_argument("--channel", metavar="NAME",
+                   help="channel of a multi-channel file (GeoNet, CDMG, ...): required there")
+    s.add_argument("--allow-unusual", action="store_true",
+                   help="read a record whose time step is outside 0.0001-0.1 s or whose PGA "
+                        "is outside 0.001-10 g (refused otherwise: nearly always a unit "
+                        "mistake)")
 
 
 def register(subparsers) -> None:
@@ -27,13 +35,32 @@ def register(subparsers) -> None:
     s = sub.add_parser("show", help="measures of one record as a table")
     s.add_argument("id", help="record id or a record file path")
     s.add_argument("--scaled", action="store_true", help="apply the manifest scale_factor")
-    _file_options(s)
+    file_options(s)
     _records_option(s, argparse.SUPPRESS)
     s = sub.add_parser("plot", help="acceleration, Fourier and response spectrum figure")
     s.add_argument("id", help="record id or a record file path")
     s.add_argument("--out", required=True, help="image file to write (PNG)")
-    _file_options(s)
+    file_options(s)
     _records_option(s, argparse.SUPPRESS)
+    s = sub.add_parser("index", help="write a manifest of a folder of record files",
+                       description="Read every record file of FOLDER once and write a "
+                                   "manifest of them (ids from the file names, one per "
+                                   "channel of a multi-channel file, SHA-256, format, unit, "
+                                   "dt, points, PGA) in the schema of records/manifest.toml. "
+                                   "Written as FOLDER/manifest.toml, the records load by id "
+                                   "with URMX_RECORDS=FOLDER (or --records FOLDER).")
+    s.add_argument("folder", metavar="FOLDER", help="folder of record files")
+    s.add_argument("--out", metavar="FILE",
+                   help="manifest to write (default FOLDER/manifest.toml)")
+    s.add_argument("--pattern", metavar="GLOB",
+                   help="only these files, e.g. '*.AT2' or '**/*.V2A' (default: every file; "
+                        "files that are not records are then skipped and listed)")
+    s.add_argument("--dt", type=float, help="time step [s] of the plain number files")
+    s.add_argument("--unit", choices=UNITS,
+                   help="unit of the plain number (and ObsPy-format) files")
+    s.add_argument("--set", default="own", help="the records' set (default own)")
+    s.add_argument("--allow-unusual", action="store_true",
+                   help="also index records outside 0.0001-0.1 s or 0.001-10 g")
     s = sub.add_parser("report", help="write reports/records.md and its figures")
     s.add_argument("--out", help="Markdown file (default reports/records.md)")
     _records_option(s, argparse.SUPPRESS)
@@ -41,19 +68,17 @@ def register(subparsers) -> None:
 
 
 def _trace(args):
-    """The record of ``args.id``: a record file (with --dt/--unit) or a manifest id."""
+    """The record of ``args.id``: a record file (with --dt/--unit/--channel) or a manifest
+    id (with --channel for a multi-channel file its entry does not choose)."""
     from pathlib import Path
 
     from urmx.errors import InputError, MissingFileError
-    from urmx.records import load, manifest, read
+    from urmx.records import load, manifest, read_channel
 
     path = Path(args.id)
     if path.is_file():
-        st = read(path, dt=args.dt, unit=args.unit)
-        if len(st) > 1:
-            print(f"{args.id}: {len(st)} channels ({', '.join(tr.id for tr in st)}); "
-                  f"the first, {st[0].id}, is used")
-        return st[0]
+        return read_channel(path, dt=args.dt, unit=args.unit, channel=args.channel,
+                            allow_unusual=args.allow_unusual).trace()
     try:
         known = manifest(args.records)
     except MissingFileError:
@@ -64,10 +89,43 @@ def _trace(args):
         if path.exists():
             raise InputError(f"{args.id!r} is a folder, not a record file")
         return load(args.id, args.records)  # unknown ids: the manifest's "did you mean"
-    if args.dt is not None or args.unit is not None:
-        raise InputError(f"--dt and --unit apply to record files; {args.id!r} is a manifest "
-                         "record that states its own")
-    return load(args.id, args.records)
+    if args.dt is not None or args.unit is not None or args.allow_unusual:
+        raise InputError(f"--dt, --unit and --allow-unusual apply to record files; "
+                         f"{args.id!r} is a manifest record that states its own")
+    return load(args.id, args.records, channel=args.channel)
+
+
+def _index(args) -> int:
+    from pathlib import Path
+
+    from urmx.errors import check_output
+    from urmx.records.manifest import index, write_manifest
+
+    folder = Path(args.folder)
+    out = check_output(args.out or folder / "manifest.toml")
+    entries, skipped = index(folder, pattern=args.pattern or "*", dt=args.dt, unit=args.unit,
+                             record_set=args.set, allow_unusual=args.allow_unusual,
+                             skip_unknown=args.pattern is None)
+    for line in skipped:
+        print(f"skipped {line}")
+    if not entries:
+        from urmx.errors import InputError
+
+        raise InputError(f"no record file in {str(folder)!r} (every file was skipped)")
+    base = folder.resolve()
+    how = ("load them with URMX_RECORDS=" + str(base) if out.resolve().parent == base else
+           f"their files are relative to {base}: load them with --records {base} and this "
+           "manifest")
+    write_manifest(entries, out, comment=(
+        f"urmx record manifest of {base}, written by `urmx records index`;\n{how}.\n"
+        "Fields as in records/manifest.toml; scale_factor 1.0: edit it (and event, site, "
+        "notes) as needed,\nbut not sha256, which checks the file is the one indexed."))
+    width = max(len(e["id"]) for e in entries)
+    for e in entries:
+        print(f"{e['id']:{width}s}  {e['format']:8s} {e['unit']:6s} dt {e['dt']:<8g} "
+              f"{e['npts']:7d} points  PGA {e['expected_pga_g']:.4f} g  {e['file']}")
+    print(f"wrote {out} ({len(entries)} records)")
+    return 0
 
 
 def _run(args) -> int:
@@ -81,13 +139,17 @@ def _run(args) -> int:
             raise InputError(f"--set {args.set!r} is not a record set (sets: "
                              f"{', '.join(sets)})")
         rows = [e for e in entries.values() if not args.set or e["set"] == args.set]
-        print(f"{'id':22s} {'set':20s} {'PGA g':>6s} {'scale':>7s}  event / station / component")
+        w = max([22] + [len(e["id"]) for e in rows])
+        print(f"{'id':{w}s} {'set':20s} {'PGA g':>6s} {'scale':>7s}  event / station / "
+              "component")
         for e in rows:
-            print(f"{e['id']:22s} {e['set']:20s} {e['expected_pga_g']:6.3f} "
+            print(f"{e['id']:{w}s} {e['set']:20s} {e['expected_pga_g']:6.3f} "
                   f"{e['scale_factor']:7.4g}  {e['event']} {e.get('date', '')} / "
                   f"{e.get('station', '')} / {e.get('component', '')}"
                   + ("  [substitute]" if e.get("substitute") else ""))
         return 0
+    if args.action == "index":
+        return _index(args)
     if args.action == "show":
         from urmx.records import STANDARD_GRAVITY, measures, scale
 
@@ -95,7 +157,8 @@ def _run(args) -> int:
         if args.scaled:
             tr = scale(tr, tr.stats.record.get("scale_factor") or 1.0)
         ds = measures(tr)
-        print(f"{args.id}: {tr.stats.record.file} ({tr.stats.record.format}), "
+        channel = f" channel {tr.stats.channel}" if tr.stats.channel else ""
+        print(f"{args.id}: {tr.stats.record.file} ({tr.stats.record.format}{channel}), "
               f"dt {tr.stats.delta:g} s, {tr.stats.npts} points")
         for name, var in ds.data_vars.items():
             in_g = var.attrs["units"] == "m s-2"
@@ -113,7 +176,8 @@ def _run(args) -> int:
         check_output(args.out)
         tr = _trace(args)
         with writing(args.out, "figure"):
-            plot_record(tr, args.out, title=args.id)
+            plot_record(tr, args.out, title=args.id + (f" {tr.stats.channel}"
+                                                       if args.channel else ""))
         print(f"wrote {args.out}")
         return 0
     from urmx.records.report import write_report

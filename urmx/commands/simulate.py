@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-UNITS = ("g", "m/s2", "cm/s2", "mm/s2")
+from .records import file_options
 
 
 def register(subparsers) -> None:
@@ -13,9 +13,9 @@ def register(subparsers) -> None:
     p.add_argument("wall", metavar="WALL.toml",
                    help="wall file: Wall fields in a [wall] table or at the top level")
     p.add_argument("record", metavar="RECORD", help="record file path or manifest record id")
-    p.add_argument("--dt", type=float, help="time step [s] for record files without one")
-    p.add_argument("--unit", choices=UNITS, help="unit of a record file that does not state it")
-    p.add_argument("--scale", type=float, default=1.0, help="record scale factor (default 1)")
+    file_options(p, "the record file")
+    p.add_argument("--scale", type=float, default=1.0,
+                   help="record scale factor, > 0 (default 1)")
     p.add_argument("--cor", type=float, default=0.8,
                    help="coefficient of restitution in (0, 1] (default 0.8)")
     p.add_argument("--impact", choices=("scale", "contact"), default="scale",
@@ -32,35 +32,33 @@ def register(subparsers) -> None:
     p.set_defaults(handler=_run)
 
 
-def _record(arg: str, dt: float | None, unit: str | None, records_dir):
+def _record(args):
     """The record's checked samples (`urmx.records.readers.Samples`, m s-2): a file, or else
-    a manifest id. Read without ObsPy (only ObsPy's own file formats import it)."""
+    a manifest id; one channel (--channel for a multi-channel file). Read without ObsPy
+    (only ObsPy's own file formats import it)."""
     from pathlib import Path
 
     from urmx.errors import InputError, MissingFileError
     from urmx.records import load_samples, manifest
-    from urmx.records.readers import read_samples
+    from urmx.records.readers import read_channel
 
-    path = Path(arg)
+    path = Path(args.record)
     if path.is_file():
-        chans = read_samples(path, dt=dt, unit=unit)
-        if len(chans) != 1:
-            ids = ", ".join(f"{c.network}.{c.station}..{c.channel}" for c in chans)
-            raise InputError(f"record file {arg!r} holds {len(chans)} channels ({ids}); "
-                             f"give a file with one channel")
-        return chans[0]
+        return read_channel(path, dt=args.dt, unit=args.unit, channel=args.channel,
+                            allow_unusual=args.allow_unusual)
     try:
-        ids = manifest(records_dir)
+        ids = manifest(args.records)
     except MissingFileError:
-        if records_dir is not None:
+        if args.records is not None:
             raise
         ids = {}
-    if arg not in ids:
-        raise MissingFileError(f"record {arg!r} is neither a file nor a manifest record id")
-    if dt is not None or unit is not None:
-        raise InputError(f"--dt and --unit apply to record files; {arg!r} is a manifest "
-                         f"record that states its own")
-    return load_samples(arg, records_dir)
+    if args.record not in ids:
+        raise MissingFileError(f"record {args.record!r} is neither a file nor a manifest "
+                               "record id")
+    if args.dt is not None or args.unit is not None:
+        raise InputError(f"--dt and --unit apply to record files; {args.record!r} is a "
+                         "manifest record that states its own")
+    return load_samples(args.record, args.records, channel=args.channel)
 
 
 def _table(values: dict) -> str:
@@ -78,14 +76,22 @@ def _table(values: dict) -> str:
 def _run(args) -> int:
     """One analysis. Without --out or --plot the solver is called directly and nothing of
     xarray, dask or matplotlib is imported (a second or so less per command)."""
-    from urmx.catalog import read_wall
-    from urmx.errors import check_output, writing
+    import contextlib
+    import math
 
+    from urmx.catalog import read_wall
+    from urmx.errors import InputError, check_output, writing
+    from urmx.model import allow_unusual_walls
+
+    if not (math.isfinite(args.scale) and args.scale > 0):
+        raise InputError(f"--scale: scale={args.scale!r} must be a positive factor (a record "
+                         "is scaled, never reversed or zeroed)")
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:
             check_output(path, option)
-    wall = read_wall(args.wall)
-    rec = _record(args.record, args.dt, args.unit, args.records)
+    with allow_unusual_walls() if args.allow_unusual else contextlib.nullcontext():
+        wall = read_wall(args.wall)
+    rec = _record(args)
     kw = dict(scale=args.scale, cor=args.cor, impact=args.impact, tail=args.tail)
     if args.out or args.plot:
         from urmx.simulation import simulate

@@ -42,7 +42,18 @@ class RecordUnitError(RecordError):
 
 
 class MissingTimeStepError(RecordError):
-    """The file does not carry its time step and none was given."""
+    """The time step is missing (the file does not carry it and none was given), is not a
+    positive number, or contradicts the file's own (header, comment or time column)."""
+
+
+class UnusualRecordError(RecordUnitError):
+    """A time step, peak or file size outside what strong-motion records have (most often a
+    unit mistake: values in g under a cm/s2 header, milliseconds given as seconds); read it
+    anyway with ``allow_unusual=True`` (``--allow-unusual``) when it is really meant."""
+
+
+class ChannelError(RecordError):
+    """A file holds several channels and none was chosen, or not the one asked for."""
 
 
 class UnsupportedRecordError(RecordError):

@@ -1,21 +1,28 @@
-"""The record manifest (``records/manifest.toml``) and loading records by id.
+"""The record manifest (``records/manifest.toml``, plus a records folder's own
+``manifest.toml``) and loading records by id; :func:`index` writes a manifest of a folder.
 
 The manifest lives in the repository; the data files do not. ``file`` entries are
 resolved against the records directory (:func:`urmx.config.records_dir`), the file's
-SHA-256 is checked, and the record is read with the manifest's format, dt and unit.
+SHA-256 is checked, and the record is read with the manifest's format, dt and unit. A
+records directory that holds a ``manifest.toml`` of its own (what ``urmx records index``
+writes) adds its records to the checkout's: ``URMX_RECORDS=my/suite`` makes them
+loadable by id.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
+import math
 import os
+import re
 import sys
 from pathlib import Path
 
 from ..config import project_root
 from ..config import records_dir as _records_dir
-from ..errors import MissingFileError
-from .errors import ChecksumError, ManifestError
+from ..errors import InputError, MissingFileError, writing
+from .errors import ChecksumError, ManifestError, UnknownFormatError, UnsupportedRecordError
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -24,8 +31,31 @@ else:  # pragma: no cover
 
 #: the manifest file in the source checkout
 MANIFEST = project_root() / "records" / "manifest.toml"
+#: a records folder's own manifest (``urmx records index``), read beside `MANIFEST`
+FOLDER_MANIFEST = "manifest.toml"
 _REQUIRED = ("id", "set", "event", "file", "format", "dt", "unit", "sha256", "expected_pga_g",
              "scale_factor", "source", "notes")
+
+
+def _read_manifest(src: Path) -> list[dict]:
+    try:
+        data = tomllib.loads(src.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise MissingFileError(f"record manifest {str(src)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ManifestError(src, f"cannot be read: {getattr(exc, 'strerror', None) or exc}") \
+            from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ManifestError(src, f"not valid TOML: {exc}") from None
+    records = data.get("record", [])
+    if not isinstance(records, list) or not all(isinstance(e, dict) for e in records):
+        raise ManifestError(src, "`record` must be an array of tables ([[record]])")
+    for k, entry in enumerate(records):
+        missing = [f for f in _REQUIRED if f not in entry]
+        if missing:
+            raise ManifestError(src, f"record #{k + 1} ({entry.get('id', '?')}) lacks "
+                                f"{', '.join(missing)}")
+    return records
 
 
 def manifest(records_dir: str | os.PathLike | None = None,
@@ -37,42 +67,47 @@ def manifest(records_dir: str | os.PathLike | None = None,
     records_dir : str or path-like, optional
         Records directory used to add each entry's absolute ``path``; if omitted the
         configured one is used when set (``URMX_RECORDS``, ``urmx.toml``), otherwise
-        entries carry no ``path``.
+        entries carry no ``path``. A ``manifest.toml`` in it adds its records.
     path : str or path-like, optional
-        Another manifest file (default ``records/manifest.toml``).
+        Another manifest file, read alone (default: ``records/manifest.toml`` and the
+        records directory's ``manifest.toml``).
 
     Returns
     -------
     dict of str to dict
         Record id -> entry with every manifest field (id, set, event, date, magnitude,
         station, component, site, source, file, format, dt [s], unit, sha256,
-        expected_pga_g [g], paper_scale_factor, scale_factor, notes, ...), in file order.
+        expected_pga_g [g], paper_scale_factor, scale_factor, notes, ...), in file order;
+        ``manifest`` names the file the entry comes from.
+
+    Raises
+    ------
+    ManifestError
+        A manifest that is not valid TOML, an entry without a required field, or an id
+        that appears twice (in one file or in both).
     """
-    src = Path(path) if path is not None else MANIFEST
-    try:
-        data = tomllib.loads(src.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise MissingFileError(f"record manifest {str(src)!r} does not exist") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ManifestError(src, f"not valid TOML: {exc}") from None
     base = None
     try:
         base = _records_dir(records_dir)
     except FileNotFoundError:
         if records_dir is not None:
             raise
+    sources = [Path(path)] if path is not None else [MANIFEST]
+    if path is None and base is not None:
+        own = base / FOLDER_MANIFEST
+        if own.is_file() and not (MANIFEST.is_file() and own.samefile(MANIFEST)):
+            sources.append(own)
     out: dict[str, dict] = {}
-    for k, entry in enumerate(data.get("record", [])):
-        missing = [f for f in _REQUIRED if f not in entry]
-        if missing:
-            raise ManifestError(src, f"record #{k + 1} ({entry.get('id', '?')}) lacks "
-                                f"{', '.join(missing)}")
-        if entry["id"] in out:
-            raise ManifestError(src, f"record id {entry['id']!r} appears twice")
-        entry = dict(entry)
-        if base is not None:
-            entry["path"] = str(base / entry["file"])
-        out[entry["id"]] = entry
+    for src in sources:
+        for entry in _read_manifest(src):
+            if entry["id"] in out:
+                other = out[entry["id"]]["manifest"]
+                where = "twice" if other == str(src) else f"also in {other}"
+                raise ManifestError(src, f"record id {entry['id']!r} appears {where}")
+            entry = dict(entry, manifest=str(src))
+            if base is not None:
+                entry["path"] = str(base / entry["file"])
+            out[entry["id"]] = entry
     return out
 
 
@@ -85,19 +120,22 @@ def sha256(path: str | os.PathLike) -> str:
     return h.hexdigest()
 
 
-def entry(record_id: str, records_dir: str | os.PathLike | None = None) -> dict:
-    """One manifest entry; a clear error listing close ids if it is unknown."""
-    entries = manifest(records_dir)
+def entry(record_id: str, records_dir: str | os.PathLike | None = None,
+          path: str | os.PathLike | None = None) -> dict:
+    """One manifest entry (`path`: another manifest, as for :func:`manifest`); a clear
+    error listing close ids if it is unknown."""
+    entries = manifest(records_dir, path)
     if record_id not in entries:
         import difflib
 
         close = difflib.get_close_matches(record_id, list(entries), n=4, cutoff=0.5)
         hint = f"; did you mean {', '.join(close)}?" if close else "; see `urmx records list`"
-        raise ManifestError(MANIFEST, f"no record with id {record_id!r}{hint}")
+        raise ManifestError(path or MANIFEST, f"no record with id {record_id!r}{hint}")
     return entries[record_id]
 
 
-def load(record_id: str, records_dir: str | os.PathLike | None = None):
+def load(record_id: str, records_dir: str | os.PathLike | None = None, *,
+         channel: str | None = None, manifest: str | os.PathLike | None = None):
     """Load a manifest record as an :class:`obspy.Trace` in m s-2 (not scaled).
 
     Parameters
@@ -107,7 +145,12 @@ def load(record_id: str, records_dir: str | os.PathLike | None = None):
         ``p695-01-mul009``, ...).
     records_dir : str or path-like, optional
         Folder the manifest's ``file`` entries are resolved against (default
-        :func:`urmx.config.records_dir`).
+        :func:`urmx.config.records_dir`); a ``manifest.toml`` in it adds its records.
+    channel : str, optional
+        The channel of a multi-channel file whose entry names none; it must agree with
+        the entry's ``channel`` where there is one.
+    manifest : str or path-like, optional
+        Another manifest file (what ``urmx records index`` wrote), read alone.
 
     Returns
     -------
@@ -122,39 +165,198 @@ def load(record_id: str, records_dir: str | os.PathLike | None = None):
         and its source).
     ChecksumError
         The file's SHA-256 differs from the manifest.
+    ManifestError
+        An unknown id, or a multi-channel file without a channel (the message lists them).
     """
-    s = load_samples(record_id, records_dir)
+    s = load_samples(record_id, records_dir, channel=channel, manifest=manifest)
     tr = s.trace()
     tr.stats.processing.append(f"urmx.records.load: {record_id!r}, sha256 verified")
     return tr
 
 
-def load_samples(record_id: str, records_dir: str | os.PathLike | None = None):
+def load_samples(record_id: str, records_dir: str | os.PathLike | None = None, *,
+                 channel: str | None = None, manifest: str | os.PathLike | None = None):
     """:func:`load` without ObsPy: the record as :class:`urmx.records.readers.Samples`
     (``data`` in m s-2, ``dt``, ``record`` with the manifest entry's id, set, scale_factor,
-    paper_scale_factor and sha256). Same checks and errors as :func:`load`."""
-    from .readers import read_samples
+    paper_scale_factor and sha256). Same arguments, checks and errors as :func:`load`; the
+    file is read once."""
+    from .errors import RecordError
+    from .readers import read_file, same_channel, stated_by_format
 
     base = _records_dir(records_dir)
-    e = entry(record_id, base)
+    e = entry(record_id, base, manifest)
     path = base / e["file"]
     if not path.is_file():
         raise MissingFileError(f"record {record_id!r}: file {str(path)!r} is missing; it comes "
-                                f"from {e['source']}")
-    digest = sha256(path)
-    if digest != e["sha256"]:
-        raise ChecksumError(path, f"record {record_id!r}: SHA-256 {digest[:12]}... differs from "
-                            f"the manifest's {e['sha256'][:12]}...; the file is not the one "
-                            f"from {e['source']}")
-    carries = e["format"] != "columns"  # formats with headers state dt and unit themselves
-    chans = read_samples(path, format=e["format"], dt=None if carries else e["dt"],
-                         unit=None if carries else e["unit"])
-    if "channel" in e:
-        chans = [c for c in chans if c.channel == e["channel"]]
-    if len(chans) != 1:
-        raise ManifestError(path, f"record {record_id!r}: expected one channel, found "
-                            f"{len(chans)}; set `channel` in the manifest")
-    s = chans[0]
+                               f"from {e['source']}")
+
+    def mismatch(digest):
+        return ChecksumError(path, f"record {record_id!r}: SHA-256 {digest[:12]}... differs "
+                             f"from the manifest's {e['sha256'][:12]}...; the file is not the "
+                             f"one from {e['source']}")
+
+    want = e.get("channel")
+    if channel is not None and want is not None and not same_channel(want, channel):
+        raise ManifestError(e["manifest"], f"record {record_id!r} is channel {want!r} of "
+                            f"{e['file']}, not {channel!r}")
+    states = stated_by_format(e["format"])
+    try:
+        got = read_file(path, e["format"], None if "dt" in states else e["dt"],
+                    None if "unit" in states else e["unit"], want or channel,
+                    bool(e.get("allow_unusual", False)))
+    except RecordError:
+        digest = sha256(path)  # a file that no longer reads: say first that it changed
+        if digest != e["sha256"]:
+            raise mismatch(digest) from None
+        raise
+    if got.sha256 != e["sha256"]:
+        raise mismatch(got.sha256)
+    if len(got.samples) != 1:
+        raise ManifestError(e["manifest"], f"record {record_id!r}: {e['file']} holds "
+                            f"{len(got.samples)} channels ({', '.join(got.channels)}); set "
+                            "`channel` in the manifest (or pass channel=)")
+    s = got.samples[0]
     s.record.update({k: e.get(k) for k in ("id", "set", "scale_factor",
                                            "paper_scale_factor", "sha256")})
     return s
+
+
+# -- a manifest of a folder of record files (``urmx records index``) --------------------
+
+
+def record_id(text: str) -> str:
+    """A record id from a file name or channel: lower case, runs of other characters than
+    letters and digits as one ``-`` (``RSN763_LOMAP_GIL067`` -> ``rsn763-lomap-gil067``)."""
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-") or "record"
+
+
+def index(folder: str | os.PathLike, *, pattern: str = "*", dt: float | None = None,
+          unit: str | None = None, record_set: str = "own", allow_unusual: bool = False,
+          skip_unknown: bool = False) -> tuple[list[dict], list[str]]:
+    """Manifest entries for the record files of a folder, each file read once.
+
+    Parameters
+    ----------
+    folder : str or path-like
+        The folder; ``file`` entries are relative to it (it is the records directory the
+        entries are loaded with).
+    pattern : str
+        Glob of the files to index, relative to `folder` (``"*.AT2"``, ``"**/*.V2A"``).
+    dt : float, optional
+        Time step [s] of the plain number files (format ``columns``) that do not state
+        one; files that state their own are not given it.
+    unit : {"g", "m/s2", "cm/s2", "mm/s2"}, optional
+        Unit of the plain number files and ObsPy-format files (which do not state one).
+    record_set : str
+        The entries' ``set``.
+    allow_unusual : bool
+        Index records outside `urmx.records.readers.DT_RANGE`/`PGA_RANGE_G` too; their
+        entries carry ``allow_unusual = true``.
+    skip_unknown : bool
+        Leave out files that are not record files (unknown format, spectra, pickles)
+        instead of stopping at the first; they are listed in the second return value.
+
+    Returns
+    -------
+    entries : list of dict
+        One entry per channel (a multi-channel file gives one per channel, with
+        ``channel``), with every field `manifest` requires: id (from the file name, and
+        the channel for multi-channel files; unique, and none an id of
+        ``records/manifest.toml``), set, event (the file's header line naming the record,
+        else its name), station, component, file, format, dt [s], unit, npts, sha256,
+        expected_pga_g (unscaled PGA [g]), scale_factor (1.0), source, notes.
+    skipped : list of str
+        ``"name: why"`` for each file left out.
+
+    Raises
+    ------
+    InputError
+        No file matches `pattern`.
+    RecordError
+        A file that cannot be read (names it; with ``skip_unknown`` only for files of a
+        known format).
+    """
+    from .readers import describe_all, detect_format, stated_by_format
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise MissingFileError(f"records folder {str(folder)!r} does not exist")
+    files = sorted(p for p in folder.glob(pattern) if p.is_file()
+                   and not p.name.startswith(".") and p.name != FOLDER_MANIFEST)
+    if not files:
+        raise InputError(f"no file in {str(folder)!r} matches {pattern!r}")
+    found, skipped = [], []
+    for f in files:
+        try:
+            fmt = detect_format(f, allow_unusual=allow_unusual)
+        except (UnknownFormatError, UnsupportedRecordError) as exc:
+            if not skip_unknown:
+                raise
+            why = exc.problem.split("; urmx reads")[0]  # not the list of formats each time
+            skipped.append(f"{f.relative_to(folder).as_posix()}: {why}")
+            continue
+        states = stated_by_format(fmt)
+        rfs = describe_all(f, dt=None if "dt" in states else dt,
+                           unit=None if "unit" in states else unit,
+                           allow_unusual=allow_unusual)
+        found.extend((f, rf, len(rfs) > 1) for rf in rfs)
+    taken = set(manifest(path=MANIFEST)) if MANIFEST.is_file() else set()
+    ids = _unique_ids([record_id(f.stem) + (f"-{record_id(rf.channel)}" if multi else "")
+                       for f, rf, multi in found],
+                      [record_id(f.name) + (f"-{record_id(rf.channel)}" if multi else "")
+                       for f, rf, multi in found], taken, record_id(record_set))
+    entries = []
+    for ident, (f, rf, multi) in zip(ids, found, strict=True):
+        rel = f.relative_to(folder).as_posix()
+        e = dict(id=ident, set=record_set, event=rf.description or f.name,
+                 station=rf.station, component=rf.channel)
+        if multi:
+            e["channel"] = rf.channel
+        e.update(source=f"{rel} (urmx records index)", file=rel, format=rf.format, dt=rf.dt,
+                 unit=rf.unit, npts=rf.npts, sha256=rf.sha256,
+                 expected_pga_g=float(f"{rf.pga_g:.6g}"), scale_factor=1.0,
+                 notes="; ".join(rf.processing[1:]) or "read as it is")
+        if allow_unusual:
+            e["allow_unusual"] = True
+        entries.append(e)
+    return entries, skipped
+
+
+def _unique_ids(short: list[str], long: list[str], taken: set[str], prefix: str) -> list[str]:
+    """Ids from `short` (file stems), using `long` (with the extension) where two clash,
+    prefixing `prefix` to ids of the checkout's manifest, numbering what still clashes."""
+    ids = [long[k] if short.count(s) > 1 else s for k, s in enumerate(short)]
+    ids = [f"{prefix}-{i}" if i in taken else i for i in ids]
+    out, seen = [], set(taken)
+    for i in ids:
+        j, n = i, 2
+        while j in seen:
+            j, n = f"{i}-{n}", n + 1
+        seen.add(j)
+        out.append(j)
+    return out
+
+
+def _toml(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise InputError(f"a manifest value must be finite, not {value!r}")
+        return repr(value)
+    return json.dumps(str(value)).replace("\x7f", "\\u007f")  # a TOML basic string
+
+
+def write_manifest(entries: list[dict], path: str | os.PathLike, comment: str = "") -> Path:
+    """Write manifest entries as ``[[record]]`` tables of a TOML file (the schema of
+    ``records/manifest.toml``), `comment` as ``#`` lines on top. Returns the path."""
+    path = Path(path)
+    lines = [f"# {ln}".rstrip() for ln in comment.splitlines()]
+    for e in entries:
+        lines += ["", "[[record]]"] + [f"{k} = {_toml(v)}" for k, v in e.items()
+                                       if k not in ("path", "manifest")]
+    with writing(path, "manifest"):
+        path.write_text("\n".join(lines).lstrip("\n") + "\n", encoding="utf-8")
+    return path

@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import InputError
 from ..jitcache import jit
 from ..variables import attrs, stamp
-from .readers import STANDARD_GRAVITY
+from .readers import STANDARD_GRAVITY, check_finite
 
 if TYPE_CHECKING:  # xarray is imported where a result is built: reading a record stays light
     import xarray as xr
@@ -53,11 +53,12 @@ def as_trace(record):
 
 
 def _series(trace):
-    acc = np.asarray(trace.data, dtype=float)
+    """(acceleration, dt) of a trace: a positive time step [s] and finite samples, or an
+    error naming the trace (and the first NaN sample's index)."""
     dt = float(trace.stats.delta)
     if not (np.isfinite(dt) and dt > 0):
         raise InputError(f"trace {trace.id!r} has time step {dt!r} s; it must be positive")
-    return acc, dt
+    return check_finite(trace.data, f"trace {trace.id!r}", dt), dt
 
 
 def _check_damping(damping) -> float:
@@ -276,7 +277,7 @@ def sdof_displacement(acc, dt: float, period: float, damping: float = 0.05) -> n
         raise InputError(f"period={period!r} must be a positive period in seconds")
     omega = np.array([2.0 * np.pi / period])
     coef = nigam_jennings_coefficients(omega, damping, dt)
-    p = -np.asarray(acc, dtype=float)
+    p = -check_finite(acc, "acc", dt)
     return _nj_run(p, coef, omega, float(damping), True)[3][:, 0]
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from .readers import STANDARD_GRAVITY
+from .readers import STANDARD_GRAVITY, check_finite
 
 
 def baseline(trace, order: int = 0):
@@ -85,7 +85,8 @@ def scale(trace, factor: float | None = None, target_pga: float | None = None):
     if (factor is None) == (target_pga is None):
         raise InputError("scale: give exactly one of factor= or target_pga=")
     tr = trace.copy()
-    pga = float(np.max(np.abs(tr.data)))
+    pga = float(np.max(np.abs(check_finite(tr.data, f"scale: trace {tr.id!r}",
+                                           tr.stats.delta))))
     if target_pga is not None:
         if pga == 0:
             raise InputError(f"scale: trace {tr.id} is all zeros, cannot reach a target PGA")

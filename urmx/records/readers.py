@@ -1,16 +1,20 @@
 """Readers: accelerogram files of many formats -> :class:`obspy.Stream` in m s-2.
 
-The format is found from the file's content (:func:`detect_format`), not its name. Each
-format parser returns plain :class:`_Channel` objects; one builder (:func:`_to_trace`)
-checks them (point count, NaN, unit plausibility), converts to m s-2, resamples uneven
-time steps (with a :class:`urmx.UrmxWarning`) and writes every step to
-``stats.processing``.
+The format is found from the file's first bytes (:func:`detect_format`), not its name or
+its whole content. Each format parser returns plain :class:`_Channel` objects; one builder
+(:func:`_checked`) checks them (point count, NaN, a time step and peak within what
+strong-motion records have, units stated twice that agree), converts to m s-2, resamples
+uneven time steps (with a :class:`urmx.UrmxWarning`) and writes every step to
+``stats.processing``. :func:`describe` gives one channel of one file with its provenance
+(SHA-256, format, unit, time step) for manifests and studies.
 
 Supported: PEER NGA ``.AT2``; GeoNet ``.V1A``/``.V2A``; COSMOS V1/V2 (``.V1c``/``.V2c``;
 the raw-count ``V0c`` is refused); CDMG/CSMIP and USC Vol 1/Vol 2 text (including the
 film records' unevenly spaced (time, accel) pairs); USGS SMC; K-NET/KiK-net ASCII (via
 ObsPy); plain number columns (SLAMMER single column, several values per line, ``#``
-header lines, two-column time/accel); and the ObsPy formats of `OBSPY_FORMATS`.
+comment lines, two-column time/accel); and the ObsPy formats of `OBSPY_FORMATS`. Text in
+UTF-16 (with or without a byte-order mark) is decoded; compressed files and archives are
+refused with what they are and how to unpack them.
 
 Only formats whose readers parse data are ever tried: ObsPy's ``PICKLE`` format unpickles
 the file (which can run any code), so it is neither detected nor accepted by name, and a
@@ -19,18 +23,23 @@ file that looks like a Python pickle is refused before ObsPy sees it.
 
 from __future__ import annotations
 
+import codecs
+import hashlib
+import io
 import math
 import os
 import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from ..config import UrmxWarning
 from ..errors import MissingFileError
 from .errors import (
+    ChannelError,
     MissingTimeStepError,
     NonFiniteError,
     PointCountError,
@@ -39,6 +48,7 @@ from .errors import (
     TruncatedRecordError,
     UnknownFormatError,
     UnsupportedRecordError,
+    UnusualRecordError,
 )
 
 STANDARD_GRAVITY = 9.80665  # standard gravity [m s-2], for records in units of g
@@ -52,8 +62,19 @@ UNIT_FACTORS = {
 }
 _HEADER_UNITS = {**UNIT_FACTORS, "g/10": STANDARD_GRAVITY / 10.0, "um/s2": 1e-6}
 
-#: largest believable peak ground acceleration [g]; above it the unit is surely wrong
-MAX_PLAUSIBLE_PGA_G = 10.0
+#: time steps [s] of strong-motion records (10 kHz to 10 Hz sampling); a record whose
+#: time step lies outside is refused unless ``allow_unusual=True``
+DT_RANGE = (1e-4, 0.1)
+#: peak ground accelerations [g] of strong-motion records: below 0.001 g (1 cm/s2, under
+#: the trigger level of strong-motion instruments) the values are most likely g under a
+#: cm/s2 or mm/s2 label, above 10 g cm/s2 or mm/s2 under a g or m/s2 label; outside, a
+#: record is refused unless ``allow_unusual=True``
+PGA_RANGE_G = (1e-3, 10.0)
+#: largest record file read [bytes]: a strong-motion record takes a few MB at most
+MAX_RECORD_BYTES = 256 * 2**20
+#: bytes read to decide a file's format (never the whole file)
+SNIFF_BYTES = 8192
+_ALLOW = "; if it is really meant, pass allow_unusual=True (--allow-unusual on the command line)"
 
 #: nice time steps [s] that uneven records are resampled to (the largest not above the
 #: mean spacing, so the resampled record is never coarser than the original)
@@ -66,10 +87,31 @@ OBSPY_FORMATS = ("MSEED", "SAC", "GSE2", "SEISAN", "SACXY", "GSE1", "Q", "SH_ASC
                  "TSPAIR", "Y", "PDAS", "SEGY", "SU", "SEG2", "WAV", "WIN", "CSS",
                  "NNSA_KB_CORE", "AH", "GCF", "REFTEK130", "RG16", "DMX",
                  "KINEMETRICS_EVT")
+_KNOWN = ("PEER NGA AT2, GeoNet V1A/V2A, COSMOS V1/V2, CDMG/CSMIP and USC Vol 1/2, USGS SMC, "
+          "K-NET/KiK-net, plain number columns and ObsPy's " + ", ".join(OBSPY_FORMATS))
 _ALIASES = {"at2": "peer", "nga": "peer", "v1a": "geonet", "v2a": "geonet", "csmip": "dmg",
             "cdmg": "dmg", "usc": "dmg", "kiknet": "knet", "slammer": "columns",
             "plain": "columns", "text": "columns"}
 _FLOAT = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+")
+
+#: what a file is, from its first bytes, and what to do: (signature, offset, what, advice)
+_CONTAINERS = (
+    (b"\x1f\x8b", 0, "gzip-compressed", "decompress it first (gunzip FILE)"),
+    (b"PK\x03\x04", 0, "a zip archive", "unpack it first (unzip FILE) and read the record "
+     "file inside"),
+    (b"PK\x05\x06", 0, "an empty zip archive", "it holds no file"),
+    (b"BZh", 0, "bzip2-compressed", "decompress it first (bunzip2 FILE)"),
+    (b"\xfd7zXZ\x00", 0, "xz-compressed", "decompress it first (unxz FILE)"),
+    (b"\x28\xb5\x2f\xfd", 0, "zstd-compressed", "decompress it first (unzstd FILE)"),
+    (b"7z\xbc\xaf\x27\x1c", 0, "a 7-Zip archive", "unpack it first (7z x FILE)"),
+    (b"ustar", 257, "a tar archive", "unpack it first (tar xf FILE)"),
+    (b"%PDF", 0, "a PDF document", "a record is the data file itself"),
+    (b"\x89HDF\r\n\x1a\n", 0, "an HDF5 or netCDF-4 file (a urmx archive?)",
+     "a record is a strong-motion data file"),
+    (b"CDF\x01", 0, "a netCDF-3 file", "a record is a strong-motion data file"),
+    (b"CDF\x02", 0, "a netCDF-3 file", "a record is a strong-motion data file"),
+)
 
 
 @dataclass
@@ -91,11 +133,11 @@ class _Channel:
     extra: dict = field(default_factory=dict)
 
 
-# -- public entry point ----------------------------------------------------------------
+# -- public entry points ---------------------------------------------------------------
 
 
 def read(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
-         unit: str | None = None):
+         unit: str | None = None, *, channel: str | None = None, allow_unusual: bool = False):
     """Read an accelerogram file into an :class:`obspy.Stream` in m s-2.
 
     Parameters
@@ -105,13 +147,22 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     format : str, optional
         One of ``FORMATS`` (aliases ``at2``, ``v2a``, ``csmip``, ``usc``, ``slammer``, ...)
         or an ObsPy format name of ``OBSPY_FORMATS`` (``MSEED``, ``SAC``, ...). Found from
-        the content if omitted. Python pickles are never read.
+        the file's first bytes if omitted. Python pickles are never read.
     dt : float, optional
         Time step [s] for files that do not carry it (plain columns). For files that
-        do, it must agree with the header; for uneven records it is the resampling step.
+        do (a header, a ``# dt=`` comment, an evenly spaced time column) it must agree;
+        for uneven records it is the resampling step.
     unit : {"g", "m/s2", "cm/s2", "mm/s2"}, optional
-        Unit of the values, for files that do not state it; must agree with the header
-        where the file states one.
+        Unit of the values, for files that do not state it; must agree with the file
+        where it states one (a header, a ``# units:`` comment).
+    channel : str, optional
+        Only this channel of a multi-channel file (GeoNet, CDMG, ...), by its name as
+        ``stats.channel`` gives it (``"S62W"``, ``"090"`` or ``"90"``, ``"UP"``; case is
+        ignored). Without it every channel is returned.
+    allow_unusual : bool
+        Read a record whose time step lies outside `DT_RANGE`, whose PGA lies outside
+        `PGA_RANGE_G` or whose file is larger than `MAX_RECORD_BYTES`; such values are
+        refused otherwise, as they are nearly always unit mistakes.
 
     Returns
     -------
@@ -124,32 +175,230 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     Raises
     ------
     RecordError
-        A :class:`ValueError` subclass naming the file and the problem: unknown format,
-        truncated file, wrong point count, NaN, missing or non-positive dt, unit mistakes,
-        raw counts, a Python pickle.
+        A :class:`ValueError` subclass naming the file and the problem: unknown format
+        (saying what was found: compressed, an archive, text whose first line is ...),
+        a value that is not a number (with its line), truncated file, wrong point count,
+        NaN, missing, non-positive or contradicting dt, unit mistakes, a time step or
+        PGA outside what strong-motion records have (`UnusualRecordError`), an unknown
+        channel (`ChannelError`), raw counts, a Python pickle.
     urmx.errors.MissingFileError
         The file does not exist (a :class:`FileNotFoundError`).
     """
     from obspy import Stream
 
-    return Stream([c.trace() for c in read_samples(path, format, dt, unit)])
+    return Stream([c.trace() for c in read_samples(path, format, dt, unit, channel=channel,
+                                                   allow_unusual=allow_unusual)])
 
 
 def read_samples(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
-                 unit: str | None = None) -> list[Samples]:
+                 unit: str | None = None, *, channel: str | None = None,
+                 allow_unusual: bool = False) -> list[Samples]:
     """:func:`read` without ObsPy: the checked channels as :class:`Samples` (data in m s-2,
     dt, header fields, provenance). Same arguments, checks and errors as :func:`read`;
     only ObsPy's own formats import ObsPy."""
+    return read_file(path, format, dt, unit, channel, allow_unusual).samples
+
+
+def read_channel(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
+                 unit: str | None = None, *, channel: str | None = None,
+                 allow_unusual: bool = False) -> Samples:
+    """One channel of a record file as :class:`Samples`: `channel`, or the file's only
+    one; a multi-channel file without `channel` is a :class:`ChannelError` listing its
+    channels (never a silent first channel). Otherwise as :func:`read_samples`."""
+    return read_file(path, format, dt, unit, channel, allow_unusual, one=True).samples[0]
+
+
+@dataclass(frozen=True)
+class RecordFile:
+    """One channel of one record file with what a manifest or an archive keeps of it
+    (:func:`describe`).
+
+    Attributes
+    ----------
+    path : str
+        The file, absolute.
+    name : str
+        Its file name.
+    sha256 : str
+        SHA-256 of the file's bytes (hex).
+    format : str
+        One of ``FORMATS`` or the ObsPy format name (``"SAC"``, ...): what
+        ``read(format=)`` takes.
+    channel : str
+        The channel read (``""`` for files with one unnamed channel).
+    channels : tuple of str
+        Every channel the file holds.
+    unit : str
+        Unit of the values in the file (stated by it or given).
+    dt : float
+        Time step of the samples [s] (after resampling, for uneven records).
+    npts : int
+        Number of samples.
+    pga : float
+        Peak ground acceleration, unscaled. [m s-2]
+    station : str
+        Station code or name from the file (the file name's stem when it has none).
+    description : str
+        The header line that names the record (the event, for PEER files).
+    processing : tuple of str
+        What reading did (format, unit conversion, resampling), as in ``stats.processing``.
+    data : numpy.ndarray
+        The samples [m s-2], read-only.
+    """
+
+    path: str
+    name: str
+    sha256: str
+    format: str
+    channel: str
+    channels: tuple[str, ...]
+    unit: str
+    dt: float
+    npts: int
+    pga: float
+    station: str
+    description: str
+    processing: tuple[str, ...]
+    data: np.ndarray = field(repr=False, compare=False)
+
+    @property
+    def pga_g(self) -> float:
+        """Peak ground acceleration in units of standard gravity. [g]"""
+        return self.pga / STANDARD_GRAVITY
+
+    def samples(self) -> Samples:
+        """The channel as :class:`Samples` (what :func:`read_samples` returns)."""
+        record = dict(format=self.format, file=self.path, unit_in_file=self.unit,
+                      sha256=self.sha256)
+        return Samples(np.array(self.data), self.dt, self.station, "", self.channel, None,
+                       record, list(self.processing))
+
+    def trace(self):
+        """The channel as an :class:`obspy.Trace` in m s-2 (unscaled)."""
+        return self.samples().trace()
+
+
+def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float | None = None,
+             unit: str | None = None, format: str | None = None,
+             allow_unusual: bool = False) -> RecordFile:
+    """One channel of a record file with its provenance, reading the file once.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The record file.
+    channel : str, optional
+        The channel to read; required for a file of several channels (the error lists
+        them).
+    dt, unit, format, allow_unusual
+        As for :func:`read`: `dt` [s] and `unit` for files that do not state them; where
+        the file states them they must agree.
+
+    Returns
+    -------
+    RecordFile
+        Path, file name, SHA-256 of the file's bytes, format, channel (and all channels
+        of the file), unit in the file, dt [s], number of points, PGA [m s-2], station,
+        description, processing steps and the samples [m s-2].
+
+    Raises
+    ------
+    ChannelError
+        A multi-channel file without `channel`, or a channel the file does not hold.
+    RecordError, urmx.errors.MissingFileError
+        As :func:`read`.
+    """
+    return _record_files(path, read_file(path, format, dt, unit, channel, allow_unusual,
+                                     one=True))[0]
+
+
+def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str | None = None,
+                 format: str | None = None, allow_unusual: bool = False) -> list[RecordFile]:
+    """Every channel of a record file as a :class:`RecordFile`, reading the file once (same
+    arguments and errors as :func:`describe`)."""
+    return _record_files(path, read_file(path, format, dt, unit, None, allow_unusual))
+
+
+def _record_files(path, got: FileRead) -> list[RecordFile]:
+    out = []
+    for s in got.samples:
+        data = np.array(s.data)
+        data.setflags(write=False)
+        out.append(RecordFile(
+            path=str(Path(path).absolute()), name=Path(path).name, sha256=got.sha256,
+            format=s.record["format"], channel=s.channel, channels=got.channels,
+            unit=s.record["unit_in_file"], dt=s.dt, npts=int(data.size),
+            pga=float(np.max(np.abs(data))), station=s.station, description=got.description,
+            processing=tuple(s.processing), data=data))
+    return out
+
+
+def stated_by_format(format: str) -> frozenset[str]:
+    """What a file of `format` states itself (``"dt"``, ``"unit"``): headers state both,
+    ObsPy's formats the time step, plain columns neither (a ``#`` comment may)."""
+    fmt = _ALIASES.get(format.lower(), format.lower())
+    if fmt == "columns":
+        return frozenset()
+    return frozenset({"dt", "unit"}) if fmt in FORMATS else frozenset({"dt"})
+
+
+def detect_format(path: str | os.PathLike, *, allow_unusual: bool = False) -> str:
+    """Find a record file's format from its first `SNIFF_BYTES` bytes.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The record file.
+    allow_unusual : bool
+        Consult ObsPy's detectors also for files larger than `MAX_RECORD_BYTES`.
+
+    Returns
+    -------
+    str
+        One of ``FORMATS`` or ``"obspy"`` (a file one of ObsPy's detectors recognises).
+
+    Raises
+    ------
+    UnknownFormatError
+        The content matches no supported format; the message says what the file is
+        (empty, zero bytes, compressed, an archive, binary, text whose first line is ...)
+        and lists the formats urmx reads.
+    UnsupportedRecordError
+        A recognised file that holds no acceleration history (e.g. CSMIP Vol 3 spectra),
+        or a Python pickle.
+    UnusualRecordError
+        A file larger than `MAX_RECORD_BYTES` that is none of urmx's text formats.
+    """
+    return _sniff(Path(path), allow_unusual)[0]
+
+
+# -- reading: one pass over the file ---------------------------------------------------
+
+
+class FileRead(NamedTuple):
+    """What one pass over a record file gives (:func:`read_file`)."""
+
+    samples: list  # the checked channels (:class:`Samples`), or the one chosen
+    sha256: str  # of the file's bytes
+    channels: tuple[str, ...]  # every channel the file holds
+    description: str  # the header line that names the record
+
+
+def read_file(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
+              unit: str | None = None, channel: str | None = None,
+              allow_unusual: bool = False, one: bool = False) -> FileRead:
+    """Read a record file once: its checked channels, the SHA-256 of its bytes and the
+    names of all its channels. Arguments and errors as :func:`read`; with ``one=True`` a
+    multi-channel file without `channel` is a :class:`ChannelError` listing them."""
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"record file {str(path)!r} does not exist")
     if unit is not None and unit not in UNIT_FACTORS:
         raise RecordUnitError(path, f"unit {unit!r} is not one of {sorted(UNIT_FACTORS)}")
-    if dt is not None and not (np.isfinite(dt) and dt > 0):
+    if dt is not None and not (isinstance(dt, (int, float)) and np.isfinite(dt) and dt > 0):
         raise MissingTimeStepError(path, f"dt must be a positive number of seconds, got {dt!r}")
     if format is None:
-        fmt = detect_format(path)
-        obspy_format = _detect_obspy(path) if fmt == "obspy" else None
+        fmt, obspy_format = _sniff(path, allow_unusual)
     else:
         fmt = _ALIASES.get(format.lower(), format.lower())
         obspy_format = None if fmt in _PARSERS else format.upper()
@@ -159,51 +408,115 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
             raise UnsupportedRecordError(
                 path, f"format {format!r} is not read by urmx{why}; formats: "
                 f"{', '.join(FORMATS)} or ObsPy's {', '.join(OBSPY_FORMATS)}")
-    if fmt in _PARSERS:
-        text = _read_text(path)
-        channels = _PARSERS[fmt](path, text.splitlines())
-    else:
-        channels = _parse_obspy(path, obspy_format)
-    return [_checked(path, fmt, ch, dt, unit) for ch in channels]
+        _check_size(path, path.stat().st_size, allow_unusual)
+    raw = path.read_bytes()
+    digest = hashlib.sha256(raw).hexdigest()
+    encoding = None
+    try:
+        if fmt == "knet":
+            channels = _parse_knet(path, raw)
+        elif fmt in _PARSERS:
+            encoding = _text_encoding(raw[:SNIFF_BYTES]) or "latin-1"
+            channels = _PARSERS[fmt](path, _decode(raw, encoding).splitlines())
+        else:
+            channels = _parse_obspy(path, obspy_format, raw)
+            fmt = obspy_format
+    except RecordError:
+        raise
+    except (IndexError, KeyError, TypeError, ValueError, AttributeError) as exc:
+        # a header that lacks a line or field the format has: say so, with what failed
+        raise RecordError(path, f"not a well-formed {fmt} file: its header lacks a field "
+                          f"urmx reads ({type(exc).__name__}: {_one_line(exc)})") from None
+    names = tuple(c.channel for c in channels)
+    if channel is not None:
+        channels = [_select_channel(path, channels, channel)]
+    elif one and len(channels) > 1:
+        raise ChannelError(path, f"holds {len(channels)} channels ({', '.join(names)}); "
+                           "choose one with channel= (--channel NAME on the command line)")
+    samples = [_checked(path, fmt, ch, dt, unit, allow_unusual) for ch in channels]
+    if encoding in ("utf-16", "utf-16-le", "utf-16-be"):
+        for s in samples:
+            s.processing.insert(1, f"urmx.records.read: text decoded from {encoding.upper()}")
+    described = fmt in FORMATS and fmt != "columns"  # headers name the record
+    return FileRead(samples, digest, names, channels[0].note if described else "")
 
 
-def detect_format(path: str | os.PathLike) -> str:
-    """Find a record file's format from its content.
+def same_channel(name: str, wanted: str) -> bool:
+    """Whether channel `name` is the one asked for: case ignored, ``"90"`` is ``"090"``."""
+    a, b = name.strip().upper(), str(wanted).strip().upper()
+    return a == b or (a.isdigit() and b.isdigit() and int(a) == int(b))
 
-    Parameters
-    ----------
-    path : str or path-like
-        The record file.
 
-    Returns
-    -------
-    str
-        One of ``FORMATS`` or ``"obspy"`` (a file :func:`obspy.read` recognises).
+def _select_channel(path: Path, channels: list[_Channel], wanted: str) -> _Channel:
+    names = [c.channel for c in channels]
+    hits = [c for c in channels if same_channel(c.channel, wanted)]
+    if len(hits) == 1:
+        return hits[0]
+    if hits:
+        raise ChannelError(path, f"channel {wanted!r} is {len(hits)} channels of the file; "
+                           "it cannot be chosen by name")
+    held = (f"its {len(names)} channels are {', '.join(names)}" if any(names)
+            else "it holds one channel without a name: leave channel unset")
+    raise ChannelError(path, f"no channel {wanted!r}: {held}")
 
-    Raises
-    ------
-    UnknownFormatError
-        The content matches no supported format.
-    UnsupportedRecordError
-        A recognised file that holds no acceleration history (e.g. CSMIP Vol 3 spectra),
-        or a Python pickle.
-    """
-    path = Path(path)
+
+# -- sniffing: the first bytes decide --------------------------------------------------
+
+
+def _sniff(path: Path, allow_unusual: bool = False) -> tuple[str, str | None]:
+    """(format, ObsPy format or None) from the file's first `SNIFF_BYTES` bytes."""
+    size = path.stat().st_size
     with open(path, "rb") as fh:
-        head = fh.read(6000)
+        head = fh.read(SNIFF_BYTES)
+    whole = len(head) >= size
     if not head.strip():
-        raise UnknownFormatError(path, "file is empty")
+        raise UnknownFormatError(path, "file is empty" if not head else
+                                 "file holds only blank space")
+    if not head.strip(b"\x00"):
+        what = ("the file holds only zero bytes" if whole else
+                f"its first {len(head)} bytes are all zero bytes")
+        raise UnknownFormatError(path, f"{what} ({_size(size)}): a blank, sparse or damaged "
+                                 "file, not a record")
+    for magic, offset, what, advice in _CONTAINERS:
+        if head[offset:offset + len(magic)] == magic:
+            raise UnknownFormatError(path, f"file is {what}, not a record file: {advice}")
+    if head.lstrip()[:15].lower().startswith((b"<!doctype html", b"<html")):
+        raise UnknownFormatError(path, "file is an HTML page (a download that returned a web "
+                                 "page?), not a record file")
     if _looks_like_pickle(head):
         raise UnsupportedRecordError(
             path, "file is a Python pickle: urmx never reads pickles, since unpickling can "
             "run any code; convert the record to MiniSEED, SAC or text")
-    if b"\x00" in head:
-        return _obspy_or_unknown(path)
-    text = head.decode("latin-1")
+    encoding = _text_encoding(head)
+    if encoding is None:  # binary: ObsPy's detectors, on files of a record's size only
+        _check_size(path, size, allow_unusual)
+        return _obspy_or_unknown(path, "a binary file starting with bytes "
+                                 + head[:8].hex(" "))
+    text = _decode(head, encoding)
     lines = text.splitlines()
+    if not whole and lines:
+        lines = lines[:-1]  # the head may end inside a line
+    fmt = _text_format(path, lines)
+    if fmt is not None:
+        return fmt, None
+    _check_size(path, size, allow_unusual)
+    body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
+    first = next((ln.strip() for ln in lines if ln.strip()), "")
+    if body and _is_numeric_line(body[0]):  # numbers, then text: ObsPy's, or a bad line
+        found = _detect_obspy(path)
+        return ("obspy", found) if found else ("columns", None)
+    if not body:
+        return _obspy_or_unknown(path, "a text file of comment lines only, first "
+                                 f"{first[:60]!r}")
+    return _obspy_or_unknown(path, f"a text file whose first line is {first[:60]!r}")
+
+
+def _text_format(path: Path, lines: list[str]) -> str | None:
+    """One of urmx's own text formats, from the first lines, or None."""
     first = lines[0] if lines else ""
     top = "\n".join(lines[:6])
-    if "PEER NGA" in first.upper() or re.search(r"NPTS\s*=\s*\d+\s*,\s*DT\s*=", top, re.I):
+    text = "\n".join(lines)
+    if "PEER NGA" in first.upper() or re.search(r"NPTS\s*=\s*\S+\s*,\s*DT\s*=", top, re.I):
         return "peer"
     if re.match(r"\s*(Un)?corrected accelerogram\s+\S+\s+GNS", first, re.I):
         return "geonet"
@@ -219,17 +532,47 @@ def detect_format(path: str | os.PathLike) -> str:
         return "knet"
     if re.search(r"(UN)?CORRECTED ACCELEROGRAM", "\n".join(lines[:2]), re.I):
         return "dmg"
-    body = [ln for ln in lines[:-1] if ln.strip() and not ln.lstrip().startswith("#")]
-    if body and all(_is_numeric_line(ln) for ln in body[:200]):
+    body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
+    if body and all(_is_numeric_line(ln) for ln in body):
         return "columns"
-    return _obspy_or_unknown(path)
+    return None
 
 
-# -- helpers ---------------------------------------------------------------------------
+def _size(n: int) -> str:
+    return f"{n / 2**30:.1f} GiB" if n >= 2**30 else f"{n / 2**20:.1f} MiB" \
+        if n >= 2**20 else f"{n} bytes"
 
 
-def _read_text(path: Path) -> str:
-    return path.read_bytes().decode("latin-1")
+def _check_size(path: Path, size: int, allow_unusual: bool) -> None:
+    if size > MAX_RECORD_BYTES and not allow_unusual:
+        raise UnusualRecordError(path, f"file of {_size(size)} is larger than any strong-motion "
+                                 f"record (urmx reads up to {_size(MAX_RECORD_BYTES)}; is it "
+                                 f"the right file?){_ALLOW}")
+
+
+def _text_encoding(head: bytes) -> str | None:
+    """How to decode a file that starts with `head`: a text encoding, or None (binary)."""
+    if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return "utf-16"
+    n = len(head) - len(head) % 2
+    if n >= 8:
+        even, odd = head[0:n:2], head[1:n:2]
+        if odd.count(0) >= 0.95 * len(odd) and even.count(0) <= 0.01 * len(even):
+            return "utf-16-le"
+        if even.count(0) >= 0.95 * len(even) and odd.count(0) <= 0.01 * len(odd):
+            return "utf-16-be"
+    if head.startswith(codecs.BOM_UTF8):
+        return "utf-8-sig"
+    controls = sum(head.count(bytes([c])) for c in range(32) if c not in b"\t\n\v\f\r\x1a")
+    return None if controls > 0.05 * len(head) else "latin-1"
+
+
+def _decode(raw: bytes, encoding: str) -> str:
+    if encoding == "utf-8-sig":  # numbers and headers are ASCII: latin-1 never fails
+        return raw[len(codecs.BOM_UTF8):].decode("latin-1")
+    if encoding.startswith("utf-16"):
+        return raw[: len(raw) - len(raw) % 2].decode(encoding, errors="replace")
+    return raw.decode(encoding)
 
 
 def _is_numeric_line(line: str) -> bool:
@@ -263,29 +606,66 @@ def _detect_obspy(path: Path) -> str | None:
     return None
 
 
-def _obspy_or_unknown(path: Path) -> str:
-    if _detect_obspy(path) is None:
-        raise UnknownFormatError(
-            path, "unknown record format: not PEER AT2, GeoNet V1A/V2A, COSMOS, CDMG/CSMIP, "
-            "USC, SMC, K-NET, plain numbers or an ObsPy format urmx reads "
-            f"({', '.join(OBSPY_FORMATS)})")
-    return "obspy"
+def _obspy_or_unknown(path: Path, seen: str) -> tuple[str, str]:
+    found = _detect_obspy(path)
+    if found is None:
+        raise UnknownFormatError(path, f"unknown record format: {seen}; urmx reads {_KNOWN}")
+    return "obspy", found
 
 
-def _fixed(path: Path, lines: list[str], width: int, offset: int = 0) -> np.ndarray:
-    """Numbers in fixed-width fields (values may touch, so never split on spaces)."""
-    out = []
-    for ln in lines:
+def _number(tok: str) -> float | None:
+    """A number token (``_FLOAT``), or None."""
+    return float(tok) if _FLOAT.fullmatch(tok) else None
+
+
+def _not_a_number(tok: str) -> str:
+    hint = " (a decimal comma? write numbers with a decimal point)" \
+        if _DECIMAL_COMMA.fullmatch(tok) else ""
+    return f"{tok!r} is not a number{hint}"
+
+
+def _unit_name(text: str) -> str | None:
+    """A unit as urmx names it (a key of ``_HEADER_UNITS``), from a file's spelling, or
+    None: ``CM/SEC/SEC``, ``cm/s^2``, ``gal`` -> ``cm/s2``; ``G`` -> ``g``."""
+    t = text.strip().strip("()[],.;:").lower().replace(" ", "").replace("²", "2")
+    t = t.replace("**", "").replace("^", "").replace("sec", "s")
+    t = re.sub(r"/s/s$", "/s2", t)
+    t = {"gal": "cm/s2", "gals": "cm/s2", "µm/s2": "um/s2"}.get(t, t)
+    return t if t in _HEADER_UNITS else None
+
+
+def _values(path: Path, lines: list[str], first: int, what: str) -> np.ndarray:
+    """The whitespace-separated numbers of `lines` (`first`: the file line of lines[0]);
+    a bad token is named with its line."""
+    try:
+        return np.array(" ".join(lines).split(), dtype=float)
+    except ValueError:
+        for i, ln in enumerate(lines, first):
+            for tok in ln.split():
+                try:
+                    float(tok)
+                except ValueError:
+                    raise RecordError(path, f"{what} line {i}: {_not_a_number(tok)}") from None
+        raise
+def _fixed(path: Path, lines: list[str], width: int, offset: int = 0,
+           first: int | None = None) -> np.ndarray:
+    """Numbers in fixed-width fields (values may touch, so never split on spaces);
+    `first` is the file line of ``lines[0]``, for the message naming a bad value."""
+    out, where = [], []
+    for k, ln in enumerate(lines):
         ln = ln.rstrip()
         for i in range(offset, len(ln), width):
             tok = ln[i:i + width].strip()
             if tok:
                 out.append(tok)
+                where.append(k)
     try:
         return np.array(out, dtype=float)
     except ValueError:
-        bad = next(t for t in out if not _safe_float(t))
-        raise RecordError(path, f"cannot read {bad!r} as a number") from None
+        j = next(j for j, t in enumerate(out) if not _safe_float(t))
+        k = where[j]
+        line = f"line {first + k}" if first is not None else f"data line {lines[k].strip()!r}"
+        raise RecordError(path, f"{line}: {_not_a_number(out[j])}") from None
 
 
 def _safe_float(tok: str) -> bool:
@@ -332,22 +712,35 @@ def _find(pattern: str, text: str, flags=re.I):
 # -- format parsers --------------------------------------------------------------------
 
 
+_PEER_LINE4 = re.compile(r"NPTS\s*=\s*(?P<npts>[^,\s]+)\s*,?\s*DT\s*=\s*(?P<dt>\S+)", re.I)
+_PEER_LINE4_WEST2 = re.compile(r"^\s*(?P<npts>\S+)\s+(?P<dt>\S+)\s+NPTS\s*,\s*DT", re.I)
+
+
 def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     if len(lines) < 5:
         raise TruncatedRecordError(path, "PEER AT2 file ends inside its 4-line header")
-    m = re.search(r"NPTS\s*=\s*(\d+)\s*,\s*DT\s*=\s*([\d.Ee+-]+)", lines[3], re.I)
+    m = _PEER_LINE4.search(lines[3]) or _PEER_LINE4_WEST2.search(lines[3])
     if not m:
         raise RecordError(path, f"PEER AT2 line 4 has no 'NPTS=..., DT=...': {lines[3]!r}")
+    npts_tok = m.group("npts")
+    dt_tok = re.sub(r"(?i),?(sec|s)?,?$", "", m.group("dt"))
+    if not npts_tok.isdigit():
+        raise RecordError(path, f"PEER AT2 line 4: NPTS={npts_tok!r} is not a whole number: "
+                          f"{lines[3].strip()!r}")
+    dt = _number(dt_tok)
+    if dt is None:
+        raise RecordError(path, f"PEER AT2 line 4: time step DT={_not_a_number(dt_tok)}: "
+                          f"{lines[3].strip()!r}")
+    if re.search(r"VELOCITY|DISPLACEMENT", lines[2], re.I):
+        raise UnsupportedRecordError(path, "PEER file of velocity or displacement (.VT2/.DT2), "
+                                     "not acceleration: read the .AT2 file")
     unit_m = re.search(r"UNITS OF\s+(\S+)", lines[2], re.I)
-    unit = unit_m.group(1).lower() if unit_m else None
-    if unit not in _HEADER_UNITS:
+    unit = _unit_name(unit_m.group(1)) if unit_m else None
+    if unit is None:
         raise RecordUnitError(path, f"PEER AT2 header states an unknown unit: {lines[2]!r}")
-    try:
-        values = np.array(" ".join(lines[4:]).split(), dtype=float)
-    except ValueError:
-        raise RecordError(path, "PEER AT2 data contain a value that is not a number") from None
+    values = _values(path, lines[4:], 5, "PEER AT2")
     parts = [p.strip() for p in lines[1].split(",")]
-    return [_Channel(values, unit, float(m.group(2)), npts_header=int(m.group(1)),
+    return [_Channel(values, unit, dt, npts_header=int(npts_tok),
                      station=parts[2] if len(parts) > 2 else "",
                      channel=_component(parts[-1]) if len(parts) > 1 else "",
                      note=lines[1].strip())]
@@ -359,8 +752,8 @@ def _parse_geonet(path: Path, lines: list[str]) -> list[_Channel]:
         if i + 26 > len(lines):
             raise TruncatedRecordError(path, f"GeoNet file ends inside a header (line {i + 1})")
         text = "\n".join(lines[i:i + 16])
-        ints = _fixed(path, lines[i + 16:i + 20], 8).astype(int)
-        reals = _fixed(path, lines[i + 20:i + 26], 8)
+        ints = _fixed(path, lines[i + 16:i + 20], 8, first=i + 17).astype(int)
+        reals = _fixed(path, lines[i + 20:i + 26], 8, first=i + 21)
         if len(ints) != 40 or len(reals) != 60:
             raise RecordError(path, f"GeoNet header at line {i + 1} is malformed")
         n_acc, n_vel, n_dis = ints[33], ints[34], ints[35]
@@ -371,7 +764,7 @@ def _parse_geonet(path: Path, lines: list[str]) -> list[_Channel]:
                 path, f"component {len(channels) + 1} announces {n_acc} accelerations (+ "
                 f"{n_vel} velocities, {n_dis} displacements) but the file ends first")
         block = lines[start:start + n_lines[0]]
-        values = _fixed(path, block, 8)
+        values = _fixed(path, block, 8, first=start + 1)
         unit_m = _find(r"(?:units of [\d.]+ |peak\s+-?[\d.]+ )(mm/s/s|mm/s2)", text)
         peak = _find(r"Acceleration:\s+peak\s+(-?[\d.]+)", text)
         yr, mo, dy, hh, mi, ds = ints[:6]
@@ -403,19 +796,17 @@ def _parse_cosmos(path: Path, lines: list[str]) -> list[_Channel]:
     n_real, real_lines = map(int, _find(r"(\d+)\s+Real-header values follow on\s+(\d+)",
                                         lines[i]))
     width = int(_find(r"\(\d+F(\d+)\.", lines[i])[0])
-    reals = _fixed(path, lines[i + 1:i + 1 + real_lines], width)
+    reals = _fixed(path, lines[i + 1:i + 1 + real_lines], width, first=i + 2)
     i += 1 + real_lines
     n_comment = int(_find(r"(\d+)\s+Comment line", lines[i])[0])
     comments = "\n".join(lines[i + 1:i + 1 + n_comment])
     i += 1 + n_comment
     head = lines[i]
     npts = int(_find(r"^\s*(\d+)", head)[0])
-    unit_text = _find(r"units\s*=\s*([^(,]+)", head)[0].strip().lower()
-    unit = {"cm/sec2": "cm/s2", "cm/s/s": "cm/s2", "g": "g", "mm/sec2": "mm/s2",
-            "m/sec2": "m/s2"}.get(unit_text)
+    unit = _unit_name(_find(r"units\s*=\s*([^(,]+)", head)[0])
     per_line, width = map(int, _find(r"Format\s*=\s*\((\d+)[EF](\d+)", head))
     data = lines[i + 1:i + 1 + math.ceil(npts / per_line)]
-    values = _fixed(path, data, width)
+    values = _fixed(path, data, width, first=i + 2)
     code = _find(r"Code:\s*(\w+)-(\w+)", text) or ("", "")
     scnl = _find(r"<SCNL>\s*(\w+)\.(\w+)\.", comments)
     start = _find(r"Rcrd start time:\s*(\d+)/(\d+)/(\d+)\s+(\d+):(\d+):([\d.]+)", text)
@@ -433,11 +824,11 @@ def _parse_smc(path: Path, lines: list[str]) -> list[_Channel]:
         raise UnsupportedRecordError(path, "SMC raw (type 0) file holds counts, not acceleration")
     if len(lines) < 28:
         raise TruncatedRecordError(path, "SMC file ends inside its header")
-    ints = _fixed(path, lines[11:17], 10).astype(int)
-    reals = _fixed(path, lines[17:27], 15)
+    ints = _fixed(path, lines[11:17], 10, first=12).astype(int)
+    reals = _fixed(path, lines[17:27], 15, first=18)
     n_comment = int(ints[15])
     data = lines[27 + n_comment:]
-    values = _fixed(path, data, 10)
+    values = _fixed(path, data, 10, first=28 + n_comment)
     npts = int(ints[16])
     note = kind
     if values.size > npts:  # SMC readers take the announced count; report what is dropped
@@ -554,13 +945,17 @@ def _parse_dmg_block(path: Path, lines: list[str]) -> _Channel:
     return ch
 
 
-def _parse_knet(path: Path, lines: list[str]) -> list[_Channel]:
+def _one_line(exc: Exception) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _parse_knet(path: Path, raw: bytes) -> list[_Channel]:
     import obspy
 
     try:
-        st = obspy.read(str(path), format="KNET")
+        st = obspy.read(io.BytesIO(raw), format="KNET")
     except Exception as exc:  # noqa: BLE001
-        raise RecordError(path, f"K-NET/KiK-net file cannot be read: {exc}") from None
+        raise RecordError(path, f"K-NET/KiK-net file cannot be read: {_one_line(exc)}") from None
     out = []
     for tr in st:
         values = tr.data.astype(float) * tr.stats.calib * 100.0  # counts -> gal (cm/s2)
@@ -573,48 +968,147 @@ def _parse_knet(path: Path, lines: list[str]) -> list[_Channel]:
     return out
 
 
+# statements of a time step in a comment line: the keyword, then an optional "=", ":",
+# "is" or "of", then the value (which must then be a number)
+_DT_STATEMENT = re.compile(
+    r"\b(?:dt|delta|time[ -]?step|timestep|sampling interval|sample interval|spacing of)\b"
+    r"\s*(?P<sep>=|:|\bis\b|\bof\b)?\s*(?P<value>[^\s;]*)\s*(?P<unit>\w*)", re.I)
+_UNIT_STATEMENT = re.compile(r"\bunits?\b\s*(?P<sep>=|:|\bare\b|\bis\b|\bin\b|\bof\b)?"
+                             r"(?P<rest>.*)", re.I)
+_TIME_UNITS = {"": 1.0, "s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0,
+               "ms": 1e-3, "msec": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3}
+
+
+def _comment_dt(path: Path, lineno: int, comment: str) -> tuple[float, str] | None:
+    """The time step [s] a comment line states, with where it was said, or None; a
+    statement whose value is not a number is refused (never read as part of one)."""
+    found = []
+    for m in _DT_STATEMENT.finditer(comment):
+        value, unit = m.group("value").rstrip(",;)"), m.group("unit").lower()
+        if not value and not m.group("sep"):
+            continue
+        glued = re.fullmatch(rf"({_FLOAT.pattern})([a-zA-Z]+)", value)
+        if glued and glued.group(2).lower() in _TIME_UNITS:
+            value, unit = glued.group(1), glued.group(2).lower()
+        if not value[:1].isdigit() and value[:1] not in "+-." and not m.group("sep"):
+            continue  # "time step computed later": not a statement of its value
+        number = _number(value)
+        if number is None:
+            raise MissingTimeStepError(
+                path, f"comment line {lineno} {comment!r} states a time step that cannot be "
+                f"read: {_not_a_number(value)}; correct the comment, or remove it and pass "
+                "dt= (--dt)")
+        factor = _TIME_UNITS.get(unit, 1.0)
+        found.append((number * factor, f"comment line {lineno}: {comment!r}"))
+    if len({f[0] for f in found}) > 1:
+        raise MissingTimeStepError(path, f"comment line {lineno} {comment!r} states two time "
+                                   "steps")
+    return found[0] if found else None
+
+
+def _comment_unit(path: Path, lineno: int, comment: str) -> tuple[str, str] | None:
+    """The unit a comment line states (``# units: g``, ``The units are (g)``), or None;
+    a statement naming no known unit is refused."""
+    m = _UNIT_STATEMENT.search(comment)
+    if not m:
+        return None
+    for tok in m.group("rest").replace("(", " ").replace(")", " ").split():
+        name = _unit_name(tok)
+        if name is not None and name in UNIT_FACTORS:
+            return name, f"comment line {lineno}: {comment!r}"
+    if m.group("sep") or m.group("rest").strip(" :=") == "":
+        raise RecordUnitError(path, f"comment line {lineno} {comment!r} states no unit urmx "
+                              f"knows ({', '.join(UNIT_FACTORS)}, gal = cm/s2); correct the "
+                              "comment or remove it and pass unit= (--unit)")
+    return None
+
+
 def _parse_columns(path: Path, lines: list[str]) -> list[_Channel]:
-    comments = "\n".join(ln for ln in lines if ln.lstrip().startswith("#"))
-    body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
-    rows = [ln.replace(",", " ").split() for ln in body]
+    comments, body, body_lines = [], [], []
+    for i, ln in enumerate(lines, 1):
+        s = ln.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            comments.append((i, s))
+        else:
+            body.append(s)
+            body_lines.append(i)
+    if body and all(_DECIMAL_COMMA.fullmatch(s) for s in body[:50]):
+        raise RecordError(path, f"line {body_lines[0]}: {_not_a_number(body[0])}")
+    rows = [s.replace(",", " ").split() for s in body]
     try:
         values = np.array([v for r in rows for v in r], dtype=float)
     except ValueError:
-        bad = next(ln for ln in body if not _is_numeric_line(ln))
-        raise RecordError(path, f"line {bad.strip()!r} is not numbers") from None
+        for i, s, r in zip(body_lines, body, rows, strict=True):
+            bad = next((t for t in r if not _safe_float(t)), None)
+            if bad is not None:
+                raise RecordError(path, f"line {i} is not numbers: {s[:80]!r} "
+                                  f"({_not_a_number(bad)})") from None
+        raise
+    if values.size == 1:
+        raise TruncatedRecordError(path, f"the file holds a single number ({body[0]}), not an "
+                                   "acceleration history: is it the right file?")
     ch = _Channel(values, None, None, unit_from_file=False, note="plain numbers")
-    n_head = _find(r"(\d+)\s+points", comments)
-    dt_head = _find(r"spacing of\s+([\d.]+)\s*sec", comments) or _find(r"dt\s*=\s*([\d.]+)",
-                                                                         comments)
-    unit_head = _find(r"units? (?:are|is|:)\s*\(?\s*(g|m/s2|cm/s2|mm/s2|gal)\b", comments)
-    if dt_head:
-        ch.dt = float(dt_head[0])
-    if unit_head:
-        ch.unit = {"gal": "cm/s2"}.get(unit_head[0].lower(), unit_head[0].lower())
+    dts = [d for d in (_comment_dt(path, i, c) for i, c in comments) if d]
+    units = [u for u in (_comment_unit(path, i, c) for i, c in comments) if u]
+    for found, what in ((dts, "time steps"), (units, "units")):
+        if len({f[0] for f in found}) > 1:
+            raise (MissingTimeStepError if what == "time steps" else RecordUnitError)(
+                path, f"comments state two {what}: {found[0][1]} and {found[1][1]}")
+    if dts:
+        ch.dt, ch.extra["dt_source"] = dts[0]
+    if units:
+        ch.unit, ch.extra["unit_source"] = units[0]
         ch.unit_from_file = True
+    n_head = _find(r"(\d+)\s+points", "\n".join(c for _, c in comments))
     if n_head:
         ch.extra["npts_comment"] = int(n_head[0])
-    if rows and all(len(r) == 2 for r in rows) and not comments:
-        t = values[0::2]
-        if len(t) > 2 and np.all(np.diff(t) > 0):  # two columns: time [s], accel
-            ch.times, ch.values = t, values[1::2]
+    if len(rows) > 2 and all(len(r) == 2 for r in rows):
+        t, a = values[0::2], values[1::2]
+        steps = np.diff(t)
+        if _time_like(steps):  # two columns: time [s], accel (not values in pairs)
+            if not np.isfinite(t).all():
+                k = int(np.argmax(~np.isfinite(t)))
+                raise NonFiniteError(path, f"line {body_lines[k]}: time {t[k]} is not finite")
+            if np.any(steps <= 0):
+                k = int(np.argmax(steps <= 0))
+                raise RecordError(
+                    path, f"line {body_lines[k + 1]}: time {t[k + 1]:g} s does not increase "
+                    f"(line {body_lines[k]} has {t[k]:g} s); the first column of a (time, "
+                    "acceleration) file must increase strictly")
+            ch.times, ch.values = t, a
+            ch.note = "plain numbers, (time, acceleration) columns"
     return [ch]
 
 
-def _parse_obspy(path: Path, format: str | None) -> list[_Channel]:
+def _time_like(steps: np.ndarray) -> bool:
+    """Whether a first column with these differences is a time column: it increases
+    throughout (however unevenly), or nearly all its steps (a duplicate or reversal aside)
+    lie within half of the median step, which is not zero; acceleration values in pairs
+    go up and down instead."""
+    with np.errstate(invalid="ignore"):
+        if np.all(steps > 0):
+            return True
+        med = float(np.median(steps))
+        return med != 0.0 and bool(np.mean(np.abs(steps - med) <= 0.5 * abs(med)) >= 0.9)
+
+
+def _parse_obspy(path: Path, format: str | None, raw: bytes) -> list[_Channel]:
     import obspy
 
     if format is None or format.upper() not in OBSPY_FORMATS:  # never auto-detect
         raise UnknownFormatError(path, f"ObsPy format {format!r} is not one urmx reads")
     try:
-        st = obspy.read(str(path), format=format.upper())
+        st = obspy.read(io.BytesIO(raw), format=format.upper())
     except Exception as exc:  # noqa: BLE001
-        raise UnknownFormatError(path, f"ObsPy cannot read it as {format or 'any format'}: "
-                                 f"{exc}") from None
+        raise UnknownFormatError(path, f"ObsPy cannot read it as {format}: "
+                                 f"{_one_line(exc)}") from None
     return [_Channel(tr.data.astype(float), None, tr.stats.delta, network=tr.stats.network,
                      station=tr.stats.station, channel=tr.stats.channel,
                      starttime=tr.stats.starttime, unit_from_file=False,
-                     note=f"read by ObsPy ({tr.stats._format})") for tr in st]
+                     note=f"read by ObsPy ({format.upper()})",
+                     extra={"dt_source": f"{format.upper()} header"}) for tr in st]
 
 
 _PARSERS = {"peer": _parse_peer, "geonet": _parse_geonet, "cosmos": _parse_cosmos,
@@ -656,8 +1150,8 @@ class Samples:
         return tr
 
 
-def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | None
-             ) -> Samples:
+def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | None,
+             allow_unusual: bool = False) -> Samples:
     name = path.name
     label = f"channel {ch.channel!r}" if ch.channel else "the record"
     values = np.asarray(ch.values, dtype=float)
@@ -670,15 +1164,17 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
         raise cls(path, f"header of {label} announces {n_expected} {what} but the file holds "
                   f"{values.size}" + (" (file truncated?)" if cls is TruncatedRecordError
                                       else " (wrong point count in the header)"))
-    bad = ~np.isfinite(values)
-    if bad.any():
-        raise NonFiniteError(path, f"{label} has {int(bad.sum())} NaN/infinite values "
-                             f"(first at sample {int(np.argmax(bad))})")
-    # units: the file's statement wins; a contradicting argument is a mistake
+    if values.size < 2:
+        raise TruncatedRecordError(path, f"{label} holds a single sample ({values[0]:g}), not "
+                                   "an acceleration history")
+    check_finite(values, label, path=path)
+    # units: a unit stated by the file and given by the caller must agree
+    unit_source = ch.extra.get("unit_source", "header")
     if ch.unit is not None and ch.unit_from_file:
         if unit is not None and unit != ch.unit:
-            raise RecordUnitError(path, f"file states unit {ch.unit!r} but unit={unit!r} was "
-                                  "given; leave unit unset for files that state it")
+            raise RecordUnitError(path, f"file states unit {ch.unit!r} ({unit_source}) but "
+                                  f"unit={unit!r} was given; leave unit unset for files that "
+                                  "state it")
         file_unit = ch.unit
     else:
         file_unit = unit or ch.unit
@@ -686,9 +1182,11 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
         raise RecordUnitError(path, f"{fmt} file does not state its unit; pass unit= one of "
                               f"{sorted(UNIT_FACTORS)} (--unit on the command line)")
     processing = [f"urmx.records.read: {fmt} file {name!r} ({ch.note})"]
+    dt_source = ch.extra.get("dt_source", "header")
+    if ch.dt is not None and dt is not None and not math.isclose(ch.dt, dt, rel_tol=1e-6):
+        raise MissingTimeStepError(path, f"file states dt={ch.dt:g} s ({dt_source}) but "
+                                   f"dt={dt} was given")
     if ch.times is None:
-        if ch.dt is not None and dt is not None and not math.isclose(ch.dt, dt, rel_tol=1e-6):
-            raise MissingTimeStepError(path, f"file states dt={ch.dt} s but dt={dt} was given")
         step = ch.dt if ch.dt is not None else dt
         if step is None:
             raise MissingTimeStepError(path, f"{fmt} file does not carry its time step; "
@@ -698,33 +1196,77 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
         if n_comment is not None and n_comment != values.size:
             warnings.warn(f"{path}: header comment says {n_comment} points but the file holds "
                           f"{values.size}; all {values.size} values are used", UrmxWarning,
-                          stacklevel=3)
+                          stacklevel=4)
             processing.append(f"urmx: header comment said {n_comment} points, "
                               f"used all {values.size}")
     elif np.allclose(np.diff(ch.times), ch.times[1] - ch.times[0], rtol=1e-6, atol=0):
         step = float(ch.times[1] - ch.times[0])  # a time column with an even step
+        given = dt if dt is not None else ch.dt
+        if given is not None and not math.isclose(given, step, rel_tol=1e-6):
+            src = "was given" if dt is not None else f"is stated ({dt_source})"
+            raise MissingTimeStepError(path, f"the time column has an even step of {step:g} s "
+                                       f"but dt={given:g} {src}")
         processing.append(f"urmx: time column evenly spaced, dt={step:g} s")
     else:
-        values, step, msg = _resample_uneven(path, ch.times, values, dt)
-        warnings.warn(f"{path}: {label} {msg}", UrmxWarning, stacklevel=3)
+        values, step, msg = _resample_uneven(path, ch.times, values, dt if dt is not None
+                                             else ch.dt)
+        warnings.warn(f"{path}: {label} {msg}", UrmxWarning, stacklevel=4)
         processing.append(f"urmx: {msg}")
     if not (math.isfinite(step) and step > 0):
         raise MissingTimeStepError(path, f"{label} has time step dt={step!r} s; a time step "
                                    "must be a positive number of seconds")
+    lo, hi = DT_RANGE
+    if not allow_unusual and not lo <= step <= hi:
+        src = "given" if ch.dt is None and ch.times is None else \
+            "of the time column" if ch.times is not None else f"from the {dt_source}"
+        hint = (" (milliseconds given as seconds?)" if lo <= step / 1000 <= hi and step > hi
+                else " (implausibly small)" if step < lo else "")
+        raise UnusualRecordError(path, f"{label} has time step dt={step:g} s ({src}), outside "
+                                 f"the {lo:g}-{hi:g} s of strong-motion records{hint}{_ALLOW}")
     factor = _HEADER_UNITS[file_unit]
     data = values * factor
     if file_unit != "m/s2":
         processing.append(f"urmx: unit {file_unit} -> m/s2 (x {factor:g})")
-    pga_g = float(np.max(np.abs(data))) / STANDARD_GRAVITY
-    if pga_g > MAX_PLAUSIBLE_PGA_G:
-        hint = " (values look like cm/s2 or mm/s2)" if file_unit in ("g", "m/s2") else ""
-        raise RecordUnitError(path, f"{label} would have PGA {pga_g:.1f} g with unit "
-                              f"{file_unit!r}: the unit is wrong{hint}")
+    peak = float(np.max(np.abs(values)))
+    pga_g = peak * factor / STANDARD_GRAVITY
+    lo, hi = PGA_RANGE_G
+    if not allow_unusual and not lo <= pga_g <= hi:
+        if peak == 0.0:
+            raise UnusualRecordError(path, f"every sample of {label} is zero{_ALLOW}")
+        fits = [f"as {u}: {peak * f / STANDARD_GRAVITY:.3g} g"
+                for u, f in UNIT_FACTORS.items()
+                if u != file_unit and lo <= peak * f / STANDARD_GRAVITY <= hi]
+        hint = f" ({'; '.join(fits)})" if fits else ""
+        verdict = ("the unit is wrong" if pga_g > hi else
+                   "the unit is likely wrong, or the channel holds no strong motion")
+        src = unit_source if ch.unit_from_file and ch.unit else "given"
+        raise UnusualRecordError(path, f"{label} would have PGA {pga_g:.3g} g with unit "
+                                 f"{file_unit!r} ({src}), outside the {lo:g}-{hi:g} g of "
+                                 f"strong-motion records: {verdict}{hint}{_ALLOW}")
     record = dict(format=fmt, file=str(path), unit_in_file=file_unit,
                   header_pga=None if ch.header_peak is None else ch.header_peak * factor,
                   uneven=ch.times is not None)
     return Samples(data, float(step), ch.station or path.stem, (ch.network or "")[:8],
                    ch.channel or "", ch.starttime, record, processing)
+
+
+def check_finite(data, label: str = "record", dt: float | None = None,
+                 path: str | os.PathLike | None = None) -> np.ndarray:
+    """`data` as a float64 array, or a :class:`NonFiniteError` naming the first NaN or
+    infinite sample (its index, and time [s] when `dt` is given) and how many there are.
+
+    Use it wherever samples arrive from outside (a Trace, an array): a NaN must be named as
+    such, never taken for a zero.
+    """
+    values = np.asarray(data, dtype=float)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        k = int(np.argmax(bad))
+        at = f", t = {k * dt:g} s" if dt else ""
+        raise NonFiniteError(path, f"{label} has {int(bad.sum())} NaN or infinite samples of "
+                             f"{values.size}, the first at index {k} ({float(values.flat[k])}"
+                             f"{at})")
+    return values
 
 
 def _resample_uneven(path: Path, times: np.ndarray, values: np.ndarray, dt: float | None):

@@ -224,7 +224,7 @@ def test_rocking_period_from_the_pinned_mechanism_by_hand():
         assert F.static_acceleration(w) == pytest.approx(
             0.675 * (M0_2 + k * M0_1) / (0.5 * m * a1), rel=1e-9)
         # and no rotation up to instability holds more (a dense scan of the curve)
-        _, coupling, restoring, th_max, _ = F._mechanism(w)
+        _, coupling, restoring, th_max, _ = F.mechanism.pinned_mechanism(w)
         dense = max(restoring(t) for t in np.linspace(0, th_max, 2001)) / coupling
         assert dense <= F.static_acceleration(w) * (1 + 1e-12)
     periods = [F.rocking_period(wall(s)) for s in (8, 12, 16, 20, 24)]
@@ -539,7 +539,7 @@ def test_ida_refuses_scale_dimension_and_bad_supports(make_study):
 
 def test_diaphragm_with_its_own_supports():
     s = load_study("fema-p695-ida")
-    assert s.ida is not None and s.ida.im == "pga" and s.ida.rtol == 1e-3
+    assert s.kind == "ida" and s.settings.im == "pga" and s.settings.rtol == 1e-3
     assert len(s.walls) == 9 and len(s.diaphragms) == 9 and len(s.records) == 40
     d1 = s.diaphragms[0]
     d1b = s.diaphragms[5]
@@ -580,15 +580,15 @@ def test_capacities_against_a_brute_force_scan(library):
         d = s.diaphragms[rng.integers(len(s.diaphragms))]
         rid = s.records[rng.integers(len(s.records))]
         w = s.wall(spec, d)
-        rec = F.as_record(rid, library)
+        rec = F.as_record(rid, library)  # unscaled, the manifest's scale factor beside
         res = F.collapse_capacity(w, rec, im="pga", rtol=1e-3)
         analyses.append(res.analyses)
         assert not res.censored
-        pga = float(np.max(np.abs(rec.acceleration)))
+        acc = rec.scaled()  # as the search analyses it
+        pga = float(np.max(np.abs(acc)))
 
-        def collapses(x, w=w, rec=rec, pga=pga):
-            return run(w, rec.acceleration, rec.dt, scale=x / pga, cor=0.8)["status"] \
-                == "collapsed"
+        def collapses(x, w=w, acc=acc, dt=rec.dt, pga=pga):
+            return run(w, acc, dt, scale=x / pga, cor=0.8)["status"] == "collapsed"
         assert collapses(res.capacity)
         below = res.intensity[~res.collapsed]
         assert below.max() >= res.capacity / (1 + 1e-3) and not collapses(below.max())

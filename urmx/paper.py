@@ -35,7 +35,7 @@ from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
 from .config import project_root
 from .errors import MissingFileError
 from .markdown import table
-from .model import RIGID
+from .model import PAPER_G, RIGID
 from .variables import attrs as registry_attrs
 
 if sys.version_info >= (3, 11):
@@ -61,6 +61,10 @@ MANY = 0.10
 #: a share of the duration "only" a little: at most this [1]
 SMALL_SHARE = 0.05
 FAMILY1 = (11, 12)  # the unfavourable patterns
+#: the catalog studies of the paper, in the order `urmx paper` runs them (`urmx.report`
+#: reads their archives)
+STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
+           "verification-intensity")
 
 
 # ---- the paper's numbers ----------------------------------------------------------------------
@@ -1086,7 +1090,7 @@ def verification(ds: xr.Dataset, paper: Paper | None = None,
                 continue  # a cell the study's pairs leave out
             at = A.select(cell, cor=paper_cor if math.isfinite(paper_cor) else None)
             entry = manifest.get(str(r), {})
-            pga = float(cell["scaled_pga"]) / 9.81 if "scaled_pga" in cell.coords else math.nan
+            pga = float(cell["scaled_pga"]) / PAPER_G if "scaled_pga" in cell.coords else math.nan
             coll = cell["collapsed"] if "collapsed" in cell else None
             collapsed = [float(c) for c, v in zip(cell["cor"].values, coll.values, strict=True)
                          if v == 1] if coll is not None else []
@@ -1131,7 +1135,7 @@ def intensity(ds: xr.Dataset, paper: Paper | None = None) -> list[dict[str, Any]
             if not bool(np.isfinite(cell["peak_crack_displacement"]).any()):
                 continue
             cell = cell.sel(cor=cor, method="nearest")
-            g = (float(cell["scaled_pga"]) / 9.81) * np.asarray(cell["scale"].values, float)
+            g = (float(cell["scaled_pga"]) / PAPER_G) * np.asarray(cell["scale"].values, float)
             flags = np.asarray(cell["collapsed"].values, float)  # NaN: no valid result
             coll = flags == 1
             ct = np.asarray(cell["collapse_time"].values, float)
@@ -1142,7 +1146,7 @@ def intensity(ds: xr.Dataset, paper: Paper | None = None) -> list[dict[str, Any]
             row = dict(wall=str(w), record=str(r), cor=float(cell["cor"]), pga_g=g.tolist(),
                        collapsed=coll.tolist(), collapse_time=ct.tolist(),
                        first_collapse_g=first, last_standing_g=below,
-                       base_g=float(cell["scaled_pga"]) / 9.81)
+                       base_g=float(cell["scaled_pga"]) / PAPER_G)
             if "collapse_time" in spec and np.isfinite(ct).any():
                 i = int(np.nanargmin(np.abs(ct - float(spec["collapse_time"]))))
                 row["nearest_collapse"] = (float(g[i]), float(ct[i]))

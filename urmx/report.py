@@ -22,10 +22,11 @@ from . import plot as P
 from .errors import InputError, MissingFileError
 from .markdown import number as _fmt
 from .markdown import table
+from .paper import STUDIES
 from .variables import attrs as registry_attrs
 
-KINDS = {"paper-single-storey": "single", "paper-multi-storey": "multi",
-         "verification": "verification", "verification-intensity": "intensity"}
+#: the paper's studies (`urmx.paper.STUDIES`) by the short name this report uses
+KINDS = dict(zip(STUDIES, ("single", "multi", "verification", "intensity"), strict=True))
 TABLE_VI_COLUMNS = [  # (variable, header, scale to the paper's units)
     ("peak_lower_drift", "(2) crack height [mm]", 1e3),
     ("peak_upper_drift", "(3) differential top-crack [mm]", 1e3),

@@ -7,6 +7,7 @@ Public API::
     tr = load("nahanni")                            # manifest record, sha256-checked
     ds = measures(tr)                               # pga, pgv, pgd, arias_intensity, ...
     rs = response_spectrum(tr)                      # psa(period), 5 % damping
+    rec = as_record("nahanni")                      # Record: samples, dt, scale factor
 """
 
 from .errors import (
@@ -34,9 +35,11 @@ from .measures import (
 )
 from .processing import bandpass, baseline, process, resample, scale, taper
 from .readers import FORMATS, STANDARD_GRAVITY, UNIT_FACTORS, detect_format, read
+from .record import Record, as_record
 
 __all__ = [
-    "read", "detect_format", "load", "load_samples", "manifest", "measures",
+    "read", "detect_format", "load", "load_samples", "manifest", "measures", "Record",
+    "as_record",
     "response_spectrum",
     "fourier_spectrum", "significant_frequency_range", "significant_duration",
     "predominant_frequency", "arias_history", "sdof_displacement",

@@ -410,6 +410,30 @@ max_intensity = 4.5
 """
 
 
+SMALL_IDA = """
+[study]
+name = "small-ida"
+walls = ["s08", "s12", "s16", "s20", "s24"]
+diaphragms = ["D1", "D5", "D3/both"]
+records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
+cor = [0.8]
+[study.ida]
+im = "pga"
+"""
+
+
+REP_IDA = """
+[study]
+name = "rep-ida"
+walls = ["s08", "s16", "s24"]
+diaphragms = ["D1", "D4", "D1/both", "D4/both"]
+records = ["quake", "shake"]
+cor = [0.8]
+[study.ida]
+max_intensity = 100.0
+"""
+
+
 def _ida(path, **kw):
     kw.setdefault("scheduler", "serial")
     return st.run_study(path, kernel=study_kernel, progress=False, batch_size=2, **kw)
@@ -618,16 +642,7 @@ def _wait_for_parts(parts: Path, proc, timeout: float = 240.0) -> int:
 def test_ctrl_c_then_rerun_loses_no_cell(library, make_study, tmp_path):
     """`urmx ida` interrupted by SIGINT (Ctrl-C) after some batches, then run again:
     the archive equals an uninterrupted run's (every cell present, same values)."""
-    study = make_study("""
-[study]
-name = "small-ida"
-walls = ["s08", "s12", "s16", "s20", "s24"]
-diaphragms = ["D1", "D5", "D3/both"]
-records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
-cor = [0.8]
-[study.ida]
-im = "pga"
-""", "small.toml")
+    study = make_study(SMALL_IDA, "small.toml")
     env = dict(os.environ, URMX_RECORDS=str(library), MPLBACKEND="Agg")
     cmd = [sys.executable, "-m", "urmx.cli", "ida", str(study), "--scheduler", "serial",
            "--batch-size", "1", "--quiet", "--out"]
@@ -667,16 +682,7 @@ def stiff_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
 def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path):
     from urmx.fragility_report import write_report
 
-    p = make_study("""
-[study]
-name = "rep-ida"
-walls = ["s08", "s16", "s24"]
-diaphragms = ["D1", "D4", "D1/both", "D4/both"]
-records = ["quake", "shake"]
-cor = [0.8]
-[study.ida]
-max_intensity = 100.0
-""", "rep.toml")
+    p = make_study(REP_IDA, "rep.toml")
     ds = st.run_study(p, kernel=stiff_kernel, scheduler="serial", progress=False)
     assert np.isfinite(ds.predominant_frequency).all()
     path = write_report(ds, tmp_path / "rep")

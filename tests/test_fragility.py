@@ -581,6 +581,24 @@ def test_cli_ida_needs_an_ida_table(capsys):
     assert "has no [study.ida] table" in capsys.readouterr().err
 
 
+def test_urmx_run_runs_an_ida_study_and_urmx_ida_is_its_alias(fake_records, tiny, tmp_path,
+                                                              capsys):
+    """`urmx run` runs a study of any kind; `urmx ida` writes the same archive (real
+    kernel, on the small synthetic records)."""
+    from urmx.cli import main
+
+    archives = []
+    for command in ("run", "ida"):
+        out = tmp_path / f"{command}.nc"
+        assert main([command, str(tiny), "--out", str(out), "--scheduler", "serial",
+                     "--quiet"]) == 0
+        ds = st.open_study(out).load()
+        ds.attrs["history"] = ""  # the start time and the command line
+        archives.append(ds)
+    assert int(archives[0].analyses.sum()) > 16
+    xr.testing.assert_identical(*archives)
+
+
 # ---- real kernel: brute force, Ctrl-C -----------------------------------------------------------
 
 def test_capacities_against_a_brute_force_scan(library):

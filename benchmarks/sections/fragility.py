@@ -57,7 +57,7 @@ walls = ["s08", "s16", "s24"]
 diaphragms = ["D1", "D5", "D2/both"]
 records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
 cor = [0.8]
-[study.settings]
+[study.ida]
 im = "pga"
 rtol = 1e-3
 step = 1.05

@@ -42,14 +42,18 @@ _PUBLIC = {
     "resolve_records": "samples", "RecordData": "samples",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
+_SUBMODULES = ("engine", "batches", "parts", "clients", "progress", "dataset", "archive",
+               "samples", "kinds")
 __all__ = sorted(_PUBLIC)
 
 
 def __getattr__(name: str):
     if name in _PUBLIC:
         return getattr(importlib.import_module(f"urmx.study.{_PUBLIC[name]}"), name)
+    if name in _SUBMODULES:
+        return importlib.import_module(f"urmx.study.{name}")
     raise AttributeError(f"module 'urmx.study' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_PUBLIC})
+    return sorted({*globals(), *_PUBLIC, *_SUBMODULES})

@@ -33,7 +33,16 @@ from .errors import InputError
 from .fragility_analysis import GROUPS, STIFFEN
 from .markdown import number as _fmt
 from .markdown import table
+from .plot import plot_capacity_resonance as plot_resonance
+from .plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
 from .reporting import open_archive, save_figure
+
+# the figures and reductions this report used to hold, where they live now (urmx.plot,
+# urmx.fragility_analysis), under their names here too
+__all__ = ["write_report", "open_ida", "plot_ida_curves", "plot_fragility_curves",
+           "plot_median", "plot_resonance", "plot_stiffening", "resonance_table", "stiffening",
+           "GROUPS", "STIFFEN"]
+resonance_table, stiffening = FA.resonance_table, FA.stiffening
 
 
 def open_ida(archive) -> xr.Dataset:

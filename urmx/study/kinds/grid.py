@@ -123,27 +123,19 @@ def _block(study: Any) -> Callable[[np.ndarray, Batch], np.ndarray]:
 def _outputs(study: Any, tasks: list, results: dict) -> dict[str, np.ndarray]:
     """Every output over the study's dimensions: float64, NaN where no valid result exists
     (integer outputs too, so that sums and means over the grid skip those cells)."""
+    from ..dataset import cell_array
+
     shape = tuple(len(v) for v in study.dims.values())
     batches = [b for b, _ in tasks]
     block = _block(study)
-    status = _cell_status(shape, batches, results, block)
+    status = cell_array(shape, batches, results, "status", block, NOT_RUN, np.int8)
     invalid = ~np.isin(status, VALID)
     data = {}
     for name in variables.SCALARS:
-        arr = np.full(shape, np.nan)
-        for b in batches:
-            arr[b.index()] = block(results[b.key][name], b)
-        arr[invalid] = np.nan
-        data[name] = arr
+        data[name] = cell_array(shape, batches, results, name, block)
+        data[name][invalid] = np.nan
     data["status"] = status
     return data
-
-
-def _cell_status(shape, batches, results, block) -> np.ndarray:
-    status = np.full(shape, NOT_RUN, dtype=np.int8)
-    for b in batches:
-        status[b.index()] = block(results[b.key]["status"], b)
-    return status
 
 
 def _output_attrs(name: str) -> dict[str, Any]:

@@ -224,7 +224,7 @@ def test_rocking_period_from_the_pinned_mechanism_by_hand():
         assert F.static_acceleration(w) == pytest.approx(
             0.675 * (M0_2 + k * M0_1) / (0.5 * m * a1), rel=1e-9)
         # and no rotation up to instability holds more (a dense scan of the curve)
-        _, coupling, restoring, th_max, _ = F._mechanism(w)
+        _, coupling, restoring, th_max, _ = F.mechanism.pinned_mechanism(w)
         dense = max(restoring(t) for t in np.linspace(0, th_max, 2001)) / coupling
         assert dense <= F.static_acceleration(w) * (1 + 1e-12)
     periods = [F.rocking_period(wall(s)) for s in (8, 12, 16, 20, 24)]
@@ -410,6 +410,30 @@ max_intensity = 4.5
 """
 
 
+SMALL_IDA = """
+[study]
+name = "small-ida"
+walls = ["s08", "s12", "s16", "s20", "s24"]
+diaphragms = ["D1", "D5", "D3/both"]
+records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
+cor = [0.8]
+[study.ida]
+im = "pga"
+"""
+
+
+REP_IDA = """
+[study]
+name = "rep-ida"
+walls = ["s08", "s16", "s24"]
+diaphragms = ["D1", "D4", "D1/both", "D4/both"]
+records = ["quake", "shake"]
+cor = [0.8]
+[study.ida]
+max_intensity = 100.0
+"""
+
+
 def _ida(path, **kw):
     kw.setdefault("scheduler", "serial")
     return st.run_study(path, kernel=study_kernel, progress=False, batch_size=2, **kw)
@@ -539,7 +563,7 @@ def test_ida_refuses_scale_dimension_and_bad_supports(make_study):
 
 def test_diaphragm_with_its_own_supports():
     s = load_study("fema-p695-ida")
-    assert s.ida is not None and s.ida.im == "pga" and s.ida.rtol == 1e-3
+    assert s.kind == "ida" and s.settings.im == "pga" and s.settings.rtol == 1e-3
     assert len(s.walls) == 9 and len(s.diaphragms) == 9 and len(s.records) == 40
     d1 = s.diaphragms[0]
     d1b = s.diaphragms[5]
@@ -555,6 +579,24 @@ def test_cli_ida_needs_an_ida_table(capsys):
 
     assert main(["ida", "paper-single-storey", "--out", "x.nc"]) == 2
     assert "has no [study.ida] table" in capsys.readouterr().err
+
+
+def test_urmx_run_runs_an_ida_study_and_urmx_ida_is_its_alias(fake_records, tiny, tmp_path,
+                                                              capsys):
+    """`urmx run` runs a study of any kind; `urmx ida` writes the same archive (real
+    kernel, on the small synthetic records)."""
+    from urmx.cli import main
+
+    archives = []
+    for command in ("run", "ida"):
+        out = tmp_path / f"{command}.nc"
+        assert main([command, str(tiny), "--out", str(out), "--scheduler", "serial",
+                     "--quiet"]) == 0
+        ds = st.open_study(out).load()
+        ds.attrs["history"] = ""  # the start time and the command line
+        archives.append(ds)
+    assert int(archives[0].analyses.sum()) > 16
+    xr.testing.assert_identical(*archives)
 
 
 # ---- real kernel: brute force, Ctrl-C -----------------------------------------------------------
@@ -580,15 +622,15 @@ def test_capacities_against_a_brute_force_scan(library):
         d = s.diaphragms[rng.integers(len(s.diaphragms))]
         rid = s.records[rng.integers(len(s.records))]
         w = s.wall(spec, d)
-        rec = F.as_record(rid, library)
+        rec = F.as_record(rid, library)  # unscaled, the manifest's scale factor beside
         res = F.collapse_capacity(w, rec, im="pga", rtol=1e-3)
         analyses.append(res.analyses)
         assert not res.censored
-        pga = float(np.max(np.abs(rec.acceleration)))
+        acc = rec.scaled()  # as the search analyses it
+        pga = float(np.max(np.abs(acc)))
 
-        def collapses(x, w=w, rec=rec, pga=pga):
-            return run(w, rec.acceleration, rec.dt, scale=x / pga, cor=0.8)["status"] \
-                == "collapsed"
+        def collapses(x, w=w, acc=acc, dt=rec.dt, pga=pga):
+            return run(w, acc, dt, scale=x / pga, cor=0.8)["status"] == "collapsed"
         assert collapses(res.capacity)
         below = res.intensity[~res.collapsed]
         assert below.max() >= res.capacity / (1 + 1e-3) and not collapses(below.max())
@@ -618,16 +660,7 @@ def _wait_for_parts(parts: Path, proc, timeout: float = 240.0) -> int:
 def test_ctrl_c_then_rerun_loses_no_cell(library, make_study, tmp_path):
     """`urmx ida` interrupted by SIGINT (Ctrl-C) after some batches, then run again:
     the archive equals an uninterrupted run's (every cell present, same values)."""
-    study = make_study("""
-[study]
-name = "small-ida"
-walls = ["s08", "s12", "s16", "s20", "s24"]
-diaphragms = ["D1", "D5", "D3/both"]
-records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
-cor = [0.8]
-[study.ida]
-im = "pga"
-""", "small.toml")
+    study = make_study(SMALL_IDA, "small.toml")
     env = dict(os.environ, URMX_RECORDS=str(library), MPLBACKEND="Agg")
     cmd = [sys.executable, "-m", "urmx.cli", "ida", str(study), "--scheduler", "serial",
            "--batch-size", "1", "--quiet", "--out"]
@@ -667,16 +700,7 @@ def stiff_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
 def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path):
     from urmx.fragility_report import write_report
 
-    p = make_study("""
-[study]
-name = "rep-ida"
-walls = ["s08", "s16", "s24"]
-diaphragms = ["D1", "D4", "D1/both", "D4/both"]
-records = ["quake", "shake"]
-cor = [0.8]
-[study.ida]
-max_intensity = 100.0
-""", "rep.toml")
+    p = make_study(REP_IDA, "rep.toml")
     ds = st.run_study(p, kernel=stiff_kernel, scheduler="serial", progress=False)
     assert np.isfinite(ds.predominant_frequency).all()
     path = write_report(ds, tmp_path / "rep")

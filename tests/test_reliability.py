@@ -211,8 +211,7 @@ def test_analysis_reductions_skip_cells_without_valid_result(fake_records, gaps)
     assert float(res.collapses.sel(diaphragm="D5", record="shake")) == 1
     assert float(res.collapses.sel(diaphragm="D5", record="quake")) == 0
     # names instead of codes (synthetic Datasets) are understood too
-    named = ds.assign(status=xr.apply_ufunc(lambda a: np.asarray(st.STATUS, object)[a],
-                                            ds.status))
+    named = ds.assign(status=st.status_names(ds.status))
     assert float(A.valid_cells(named).collapsed.sum()) == COLLAPSES
     # an unmasked Dataset would have given the junk: the check can fail
     assert float(ds.instability_ratio.fillna(JUNK).max()) == JUNK
@@ -242,9 +241,9 @@ def _run_ida(path, **kw):
 
 def _check_ida_reductions(ds: xr.Dataset) -> None:
     """Every per-cell output of the IDA study counts the 12 cells that ran, and only them."""
-    from urmx import fragility as F
+    from urmx.study.kinds import ida
 
-    for name in F.IDA_CELL_OUTPUTS:
+    for name in ida.CELL_OUTPUTS:
         assert ds[name].dtype == np.float64, name
     assert int(ds.collapse_intensity.count()) == IDA_RUN
     assert float(ds.censored.sum()) == IDA_CENSORED
@@ -274,7 +273,7 @@ def _check_ida_reductions(ds: xr.Dataset) -> None:
     assert float(ds.analyses.sum()) == sum(expected)
     assert float(ds.analyses.mean()) == pytest.approx(np.mean(expected))
     not_run = ds.sel(wall="s18", record="quake")
-    for name in F.IDA_CELL_OUTPUTS:
+    for name in ida.CELL_OUTPUTS:
         assert bool(np.isnan(not_run[name]).all()), name
     assert bool(np.isnan(not_run.intensity).all())
 
@@ -485,7 +484,7 @@ def test_run_survives_a_killed_worker(many_records, tmp_path, monkeypatch, kind)
 def test_second_run_on_the_same_archive_is_refused(fake_records, gaps, ida_gaps, tmp_path):
     out = tmp_path / "busy.nc"
     parts = tmp_path / "busy.nc.parts"
-    with st._Lock(parts, out):  # what a running `urmx run` holds
+    with st.Lock(parts, out):  # what a running `urmx run` holds
         with pytest.raises(RunError, match=r"another urmx run \(pid \d+.*busy\.nc"):
             _run(gaps, out=out)
         with pytest.raises(RunError, match=r"another urmx run \(pid \d+.*busy\.nc"):
@@ -496,8 +495,8 @@ def test_second_run_on_the_same_archive_is_refused(fake_records, gaps, ida_gaps,
 
 def test_lock_of_a_killed_run_is_released(fake_records, gaps, tmp_path):
     out = tmp_path / "dead.nc"
-    code = ("import sys, time; from pathlib import Path; from urmx.study import _Lock; "
-            "_Lock(Path(sys.argv[1]), Path(sys.argv[2])).__enter__(); print('held', "
+    code = ("import sys, time; from pathlib import Path; from urmx.study import Lock; "
+            "Lock(Path(sys.argv[1]), Path(sys.argv[2])).__enter__(); print('held', "
             "flush=True); time.sleep(60)")
     proc = subprocess.Popen([sys.executable, "-c", code, str(tmp_path / "dead.nc.parts"),
                              str(out)], stdout=subprocess.PIPE, text=True)
@@ -517,17 +516,18 @@ def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
     parts = tmp_path / "parts.nc.parts"
     study = urmx.catalog.load_study(gaps)
     records = st.resolve_records(study)
-    tasks = [(b, st._task(study, b, records, fake_kernel)) for b in st._batches(study, 2)]
+    tasks = st.batch_tasks(study, records, 2, fake_kernel)
     assert len(tasks) == 6
     parts.mkdir()
+    store = st.PartStore(parts, st.BATCH_OUTPUTS)
     for b, t in tasks:
-        st._save_part(parts, b.key, st.run_batch(t, ACC[study.records[b.record]]))
+        store.save(b.key, st.run_batch(t, ACC[study.records[b.record]]))
     (a, _), (b, _), (c, _) = tasks[:3]
     shutil.copy(parts / f"{a.key}.npz", parts / f"{b.key}.npz")  # another batch's part
     damaged = (parts / f"{c.key}.npz").read_bytes()
     (parts / f"{c.key}.npz").write_bytes(damaged[: len(damaged) // 2])  # cut mid-write
-    assert st._load_part(parts / f"{b.key}.npz", b.key) is None
-    assert st._load_part(parts / f"{a.key}.npz", a.key) is not None
+    assert store.load(b.key) is None and store.load(c.key) is None
+    assert store.load(a.key) is not None
     err = io.StringIO()
     sys_stderr, sys.stderr = sys.stderr, err
     try:
@@ -543,7 +543,7 @@ def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
 
 def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tmp_path):
     """The same checks on an IDA study's parts (their own arrays, their own keys)."""
-    from urmx import fragility as F
+    from urmx.study.kinds import ida
 
     reference = _run_ida(ida_gaps)
     out = tmp_path / "ida.nc"
@@ -553,20 +553,20 @@ def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tm
     tasks = st.batch_tasks(study, records, 2, ida_kernel)
     assert len(tasks) == 6 and all(b.key.startswith("ida-") for b, _ in tasks)
     parts.mkdir()
+    store = st.PartStore(parts, ida.OUTPUTS)
     for b, t in tasks:
-        st._save_part(parts, b.key, F.run_ida_batch(t, records[study.records[b.record]]
-                                                    .acceleration))
+        store.save(b.key, ida.run_batch(t, records[study.records[b.record]].acceleration))
     with np.load(parts / f"{tasks[0][0].key}.npz") as z:
         assert str(z["batch_key"]) == tasks[0][0].key
-        assert set(F.IDA_OUTPUTS) <= set(z.files)
+        assert set(ida.OUTPUTS) <= set(z.files)
     (a, _), (b, _), (c, _) = tasks[:3]
     shutil.copy(parts / f"{a.key}.npz", parts / f"{b.key}.npz")  # another batch's part
     damaged = (parts / f"{c.key}.npz").read_bytes()
     (parts / f"{c.key}.npz").write_bytes(damaged[: len(damaged) // 2])  # cut mid-write
-    assert st._load_part(parts / f"{a.key}.npz", a.key, F.IDA_OUTPUTS) is not None
-    assert st._load_part(parts / f"{b.key}.npz", b.key, F.IDA_OUTPUTS) is None
+    assert store.load(a.key) is not None
+    assert store.load(b.key) is None
     # a grid batch's outputs are not an IDA batch's: a part lacking them is recomputed
-    assert st._load_part(parts / f"{a.key}.npz", a.key) is None
+    assert st.PartStore(parts, st.BATCH_OUTPUTS).load(a.key) is None
     err = io.StringIO()
     sys_stderr, sys.stderr = sys.stderr, err
     try:
@@ -657,7 +657,7 @@ def test_outputs_checked_before_any_work(fake_records, gaps, tmp_path):
 
 def test_progress_lines_in_a_log_file_and_bar_on_a_terminal():
     log = io.StringIO()
-    bar = st._Progress(200, 0, True, label="urmx demo", stream=log)
+    bar = st.Progress(200, 0, True, label="urmx demo", stream=log)
     for _ in range(20):
         bar.update(10)
     bar.close()
@@ -674,12 +674,12 @@ def test_progress_lines_in_a_log_file_and_bar_on_a_terminal():
             return True
 
     tty = Terminal()
-    bar = st._Progress(200, 50, True, label="urmx demo", stream=tty)
+    bar = st.Progress(200, 50, True, label="urmx demo", stream=tty)
     bar.update(150)
     bar.close()
     assert "\r" in tty.getvalue() and "200/200" in tty.getvalue()
     quiet = io.StringIO()
-    st._Progress(200, 0, False, stream=quiet).update(200)
+    st.Progress(200, 0, False, stream=quiet).update(200)
     assert quiet.getvalue() == ""
 
 

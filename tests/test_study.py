@@ -79,6 +79,20 @@ cor = 0.8
 """
 
 
+DIMS_STUDY = """
+[study]
+walls = ["s18", "c9"]
+diaphragms = ["specimen"]
+supports = "specimen"
+records = ["quake", "shake"]
+cor = {start = 0.70, stop = 0.72, step = 0.01}
+scale = [1.0, 2.0]
+impact = ["scale", "contact"]
+damping = [0.05]
+pairs = {s18 = ["shake"], c9 = ["quake", "shake"]}
+"""
+
+
 @pytest.fixture
 def small(make_study):
     return make_study(STUDY, "small.toml")
@@ -149,18 +163,7 @@ def test_netcdf_round_trip_is_identical(fake_records, small, tmp_path):
 
 
 def test_added_dimensions_and_pairs(fake_records, make_study):
-    path = make_study("""
-[study]
-walls = ["s18", "c9"]
-diaphragms = ["specimen"]
-supports = "specimen"
-records = ["quake", "shake"]
-cor = {start = 0.70, stop = 0.72, step = 0.01}
-scale = [1.0, 2.0]
-impact = ["scale", "contact"]
-damping = [0.05]
-pairs = {s18 = ["shake"], c9 = ["quake", "shake"]}
-""", "dims.toml")
+    path = make_study(DIMS_STUDY, "dims.toml")
     ds = st.run_study(path, kernel=fake_kernel, scheduler="serial", progress=False)
     assert ds.peak_crack_displacement.dims == ("wall", "diaphragm", "record", "cor", "scale",
                                                "impact", "damping")

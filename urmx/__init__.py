@@ -29,9 +29,10 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_report", "guard",
-               "kernel", "markdown", "model", "netcdf", "paper", "plot", "records", "reference",
-               "report", "simulation", "study", "variables")
+_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_analysis",
+               "fragility_report", "guard", "kernel", "markdown", "model", "netcdf", "paper",
+               "plot", "records", "reference", "report", "reporting", "simulation", "study",
+               "variables")
 
 
 def __getattr__(name):

@@ -14,9 +14,10 @@ Data lives in the top-level ``catalog/`` folder, never in code:
 A study file may also define its own walls (``[walls.<id>]``) and diaphragms
 (``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. A diaphragm entry
 ``"D1/both"`` (or ``"D1/top"``) gives the cells on it their own supports, so that one study
-holds single- and higher-storey walls. An ``[study.ida]`` table (im, rtol, step,
-max_intensity) makes the study an IDA study: one collapse capacity per cell
-(`urmx.fragility`). Every error names the file, the key and (where it can be found) the
+holds single- and higher-storey walls. A ``[study.<kind>]`` table names the study's kind
+and holds its settings: the catalog keeps it as data (``Study.tables``), refuses a table no
+registered kind reads, and has the kind parse it (`urmx.study.kinds`); a study without one
+is the default kind. Every error names the file, the key and (where it can be found) the
 line.
 """
 
@@ -393,7 +394,9 @@ class Study:
     pairs: dict[str, list[str]] | None = None
     histories: list[History] = field(default_factory=list)
     own_supports: dict[str, str] = field(default_factory=dict)  # diaphragm label -> supports
-    ida: IdaSettings | None = None
+    tables: dict[str, Any] = field(default_factory=dict)  # [study.<kind>] tables, as data
+    kind: str = "grid"  # the study kind (urmx.study.kinds) its tables make it
+    settings: Any = None  # the kind's settings, parsed from its table
     _src: Any = field(default=None, repr=False)
 
     @property
@@ -402,6 +405,11 @@ class Study:
              "record": list(self.records), "cor": list(self.cor)}
         d.update(self.extra)
         return d
+
+    @property
+    def specimen(self) -> bool:
+        """Whether each wall stands on its own supports (the test walls of Table II)."""
+        return self.supports == SPECIMEN
 
     @property
     def size(self) -> int:
@@ -446,66 +454,6 @@ class Study:
         if self._src is None:
             return CatalogError(f"study {self.name}: {key}: {message}")
         return self._src.error(key, message, *needles)
-
-
-@dataclass(frozen=True)
-class IdaSettings:
-    """The ``[study.ida]`` table: one collapse capacity per cell (`urmx.fragility`).
-
-    Parameters
-    ----------
-    im : str
-        Intensity measure (`urmx.fragility.IMS`).
-    rtol : float
-        Relative width of the final bracket. [1]
-    step : float
-        Ratio of the hunt's geometric grid of scale factors. [1]
-    max_intensity : float
-        Highest intensity analysed (censoring). [units of the measure]
-    """
-
-    im: str = "pga"
-    rtol: float = 1e-3
-    step: float = 1.05
-    max_intensity: float = math.nan
-
-    def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
-
-
-def _ida(src: _Source, table: Any, study: Study) -> IdaSettings:
-    """Validate ``[study.ida]`` and the grid it runs on."""
-    from .fragility import IMS, MAX_INTENSITY, STEP
-
-    if not isinstance(table, dict):
-        raise src.error("study.ida", "must be a table (im, rtol, step, max_intensity)", "ida")
-    known = ("im", "rtol", "step", "max_intensity")
-    for k in table:
-        if k not in known:
-            raise src.error(f"study.ida.{k}", f"unknown key (known: {', '.join(known)})", "ida",
-                            k)
-    im = table.get("im", "pga")
-    if im not in IMS:
-        raise src.error("study.ida.im", f"{im!r} is not an intensity measure (known: "
-                        f"{', '.join(IMS)})", "ida", "im")
-    values = {}
-    for k, default, low in (("rtol", 1e-3, 0.0), ("step", STEP, 1.0),
-                            ("max_intensity", MAX_INTENSITY[im], 0.0)):
-        v = table.get(k, default)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-                or v <= low:
-            raise src.error(f"study.ida.{k}", f"{v!r} must be a number above {low:g}", "ida", k)
-        values[k] = float(v)
-    if values["rtol"] >= 1.0:
-        raise src.error("study.ida.rtol", f"{values['rtol']!r} must be below 1", "ida", "rtol")
-    for k in ("scale", "impact", "damping"):
-        if k in study.extra:
-            raise src.error(f"study.{k}", "an IDA study scales each record itself and runs one "
-                            f"capacity per (wall, diaphragm, record, cor): {k} cannot be a "
-                            "dimension here", k)
-    if study.histories:
-        raise src.error("study.history", "an IDA study keeps no time histories", "history")
-    return IdaSettings(im=im, **values)
 
 
 def _values(src: _Source, key: str, value: Any, kind: type) -> list:
@@ -556,6 +504,12 @@ def study_path(name: str | os.PathLike, catalog: str | os.PathLike | None = None
     return found
 
 
+#: keys of the ``[study]`` table itself (a registered kind's table may sit beside them)
+STUDY_KEYS = ("name", "title", "description", "walls", "diaphragms", "supports", "records",
+              "cor", "scale", "impact", "damping", "tail", "scale_factor", "pairs", "history",
+              "catalog")
+
+
 def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Study:
     """Read and validate a study file (before any computation).
 
@@ -570,74 +524,116 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     Raises
     ------
     CatalogError
-        Naming the file, the key and the line: unknown ids, empty dimensions, bad values.
+        Naming the file, the key and the line: unknown ids, empty dimensions, bad values,
+        a ``[study.<kind>]`` table no registered kind reads or that its kind refuses.
     """
+    from .study import kinds
+
     src = _Source(study_path(path, catalog))
+    s = _study_table(src, kinds.tables())
+    if catalog is None and "catalog" in s:
+        catalog = (src.path.parent / s["catalog"]).resolve()
+    cat = _study_catalog(src, catalog)
+    for k in ("walls", "diaphragms", "records", "cor"):
+        if k not in s:
+            raise src.error(f"study.{k}", "missing", "study")
+    supports = s.get("supports", "top")
+    if supports not in SUPPORTS:
+        raise src.error("study.supports", f"{supports!r} is not one of {SUPPORTS}", "supports")
+    wall_ids = (cat.parametric_walls if s["walls"] == "parametric"
+                else _values(src, "study.walls", s["walls"], str))
+    walls = _study_walls(src, cat, wall_ids)
+    diaphragms, own_supports = _study_diaphragms(src, cat, s["diaphragms"], supports)
+    records = _values(src, "study.records", s["records"], str)
+    cor = _values(src, "study.cor", s["cor"], float)
+    for c in cor:
+        if not 0.0 <= c <= 1.0:
+            raise src.error("study.cor", f"{c!r} must lie in [0, 1]", "cor")
+    extra, impact = _added_dimensions(src, s)
+    tail = s.get("tail", 0.0)
+    if isinstance(tail, bool) or not isinstance(tail, (int, float)) or tail < 0:
+        raise src.error("study.tail", f"{tail!r} must be a duration >= 0 [s]", "tail")
+    study = Study(name=s.get("name", src.path.stem), title=s.get("title", s.get("name", "")),
+                  path=src.path, text=src.text, catalog=cat, walls=walls,
+                  diaphragms=diaphragms, supports=supports, records=records, cor=cor,
+                  extra=extra, impact=impact, tail=float(tail),
+                  scale_factor=_scale_factors(src, s, records),
+                  pairs=_pairs(src, s, wall_ids, records), own_supports=own_supports,
+                  tables={k: s[k] for k in kinds.tables() if k in s}, _src=src)
+    study.histories = _histories(src, study, s.get("history", []))
+    study.kind, study.settings = kinds.prepare(study)
+    _check_cells(src, study)
+    return study
+
+
+def _study_table(src: _Source, tables: tuple[str, ...]) -> dict:
+    """The ``[study]`` table, its keys and the file's tables checked (a registered kind's
+    table may sit in it)."""
     data = src.data
     s = data.get("study")
     if not isinstance(s, dict):
         raise src.error("study", "missing [study] table")
-    known = {"name", "title", "description", "walls", "diaphragms", "supports", "records", "cor",
-             "scale", "impact", "damping", "tail", "scale_factor", "pairs", "history",
-             "catalog", "ida"}
+    known = {*STUDY_KEYS, *tables}
     for k in s:
         if k not in known:
             raise src.error(f"study.{k}", f"unknown key (known: {', '.join(sorted(known))})", k)
     for k in data:
         if k not in ("study", "walls", "diaphragms"):
             raise src.error(k, "unknown table (known: study, walls, diaphragms)", k)
-    if catalog is None and "catalog" in s:
-        catalog = (src.path.parent / s["catalog"]).resolve()
-    cat = load_catalog(catalog)
-    for ident, t in data.get("walls", {}).items():
-        cat.walls[ident] = _wall_spec(src, ident, t, key=f"walls.{ident}")
-    for ident, t in data.get("diaphragms", {}).items():
-        cat.diaphragms[ident] = _diaphragm_from_table(src, f"diaphragms.{ident}", ident, t)
+    return s
 
-    for k in ("walls", "diaphragms", "records", "cor"):
-        if k not in s:
-            raise src.error(f"study.{k}", "missing", "study")
-    supports = s.get("supports", "top")
-    own_supports: dict[str, str] = {}
-    if supports not in SUPPORTS:
-        raise src.error("study.supports", f"{supports!r} is not one of {SUPPORTS}", "supports")
-    if s["walls"] == "parametric":
-        wall_ids = cat.parametric_walls
-    else:
-        wall_ids = _values(src, "study.walls", s["walls"], str)
+
+def _study_catalog(src: _Source, catalog: str | os.PathLike | None) -> Catalog:
+    """The catalog, extended by the study file's own walls and diaphragms."""
+    cat = load_catalog(catalog)
+    for ident, t in src.data.get("walls", {}).items():
+        cat.walls[ident] = _wall_spec(src, ident, t, key=f"walls.{ident}")
+    for ident, t in src.data.get("diaphragms", {}).items():
+        cat.diaphragms[ident] = _diaphragm_from_table(src, f"diaphragms.{ident}", ident, t)
+    return cat
+
+
+def _study_walls(src: _Source, cat: Catalog, wall_ids: list[str]) -> list[WallSpec]:
     walls = []
     for w in wall_ids:
         if w not in cat.walls:
             raise src.error("study.walls", f"unknown wall id {w!r} (known: "
                             f"{', '.join(cat.walls)})", "walls", w)
         walls.append(cat.walls[w])
+    return walls
+
+
+def _study_diaphragms(src: _Source, cat: Catalog, value: Any, supports: str
+                      ) -> tuple[list[Diaphragm], dict[str, str]]:
+    """The study's diaphragms, and the supports of those given their own (``"D1/both"``)."""
+    own_supports: dict[str, str] = {}
     if supports == SPECIMEN:
-        d_ids = _values(src, "study.diaphragms", s["diaphragms"], str)
+        d_ids = _values(src, "study.diaphragms", value, str)
         if d_ids != [SPECIMEN]:
             raise src.error("study.diaphragms", 'supports = "specimen" takes diaphragms = '
                             '["specimen"] (each wall on its own supports)', "diaphragms")
-        diaphragms = [Diaphragm(SPECIMEN, stiffness=math.nan, damping=math.nan,
-                                description="the test wall's own supports (Table II)")]
-    else:
-        diaphragms = []
-        for label in _values(src, "study.diaphragms", s["diaphragms"], str):
-            d, _, own = label.partition("/")
-            if d not in cat.diaphragms:
-                raise src.error("study.diaphragms", f"unknown diaphragm id {d!r} (known: "
-                                f"{', '.join(cat.diaphragms)})", "diaphragms", label)
-            if own and own not in ("top", "both"):
-                raise src.error("study.diaphragms", f"{label!r}: the supports after '/' must "
-                                'be "top" or "both"', "diaphragms", label)
-            if own:
-                own_supports[label] = own
-                diaphragms.append(dataclasses.replace(cat.diaphragms[d], id=label))
-            else:
-                diaphragms.append(cat.diaphragms[d])
-    records = _values(src, "study.records", s["records"], str)
-    cor = _values(src, "study.cor", s["cor"], float)
-    for c in cor:
-        if not 0.0 <= c <= 1.0:
-            raise src.error("study.cor", f"{c!r} must lie in [0, 1]", "cor")
+        return [Diaphragm(SPECIMEN, stiffness=math.nan, damping=math.nan,
+                          description="the test wall's own supports (Table II)")], own_supports
+    diaphragms = []
+    for label in _values(src, "study.diaphragms", value, str):
+        d, _, own = label.partition("/")
+        if d not in cat.diaphragms:
+            raise src.error("study.diaphragms", f"unknown diaphragm id {d!r} (known: "
+                            f"{', '.join(cat.diaphragms)})", "diaphragms", label)
+        if own and own not in ("top", "both"):
+            raise src.error("study.diaphragms", f"{label!r}: the supports after '/' must "
+                            'be "top" or "both"', "diaphragms", label)
+        if own:
+            own_supports[label] = own
+            diaphragms.append(dataclasses.replace(cat.diaphragms[d], id=label))
+        else:
+            diaphragms.append(cat.diaphragms[d])
+    return diaphragms, own_supports
+
+
+def _added_dimensions(src: _Source, s: dict) -> tuple[dict[str, list], str]:
+    """(the added dimensions scale, impact, damping the study gives, in `DIMS` order; the
+    impact law when one is given as a single value)."""
     extra: dict[str, list] = {}
     impact = "scale"
     if "impact" in s:
@@ -660,10 +656,10 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
                 if problem:
                     raise src.error("study.damping", problem, "damping")
             extra[k] = vals
-    extra = {k: extra[k] for k in DIMS if k in extra}
-    tail = s.get("tail", 0.0)
-    if isinstance(tail, bool) or not isinstance(tail, (int, float)) or tail < 0:
-        raise src.error("study.tail", f"{tail!r} must be a duration >= 0 [s]", "tail")
+    return {k: extra[k] for k in DIMS if k in extra}, impact
+
+
+def _scale_factors(src: _Source, s: dict, records: list[str]) -> dict[str, float]:
     scale_factor = {}
     for r, f in s.get("scale_factor", {}).items():
         if r not in records:
@@ -673,37 +669,37 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
             raise src.error(f"study.scale_factor.{r}", f"{f!r} must be a positive number",
                             "scale_factor", r)
         scale_factor[r] = float(f)
-    pairs = None
-    if "pairs" in s:
-        pairs = {}
-        for w, rs in s["pairs"].items():
-            if w not in wall_ids:
-                raise src.error(f"study.pairs.{w}", "names a wall the study does not list",
+    return scale_factor
+
+
+def _pairs(src: _Source, s: dict, wall_ids: list[str], records: list[str]
+           ) -> dict[str, list[str]] | None:
+    if "pairs" not in s:
+        return None
+    pairs = {}
+    for w, rs in s["pairs"].items():
+        if w not in wall_ids:
+            raise src.error(f"study.pairs.{w}", "names a wall the study does not list",
+                            "pairs", w)
+        rs = _values(src, f"study.pairs.{w}", rs, str)
+        for r in rs:
+            if r not in records:
+                raise src.error(f"study.pairs.{w}", f"record {r!r} is not in study.records",
                                 "pairs", w)
-            rs = _values(src, f"study.pairs.{w}", rs, str)
-            for r in rs:
-                if r not in records:
-                    raise src.error(f"study.pairs.{w}", f"record {r!r} is not in study.records",
-                                    "pairs", w)
-            pairs[w] = rs
-    study = Study(name=s.get("name", src.path.stem), title=s.get("title", s.get("name", "")),
-                  path=src.path, text=src.text, catalog=cat, walls=walls,
-                  diaphragms=diaphragms, supports=supports, records=records, cor=cor,
-                  extra=extra, impact=impact, tail=float(tail), scale_factor=scale_factor,
-                  pairs=pairs, own_supports=own_supports, _src=src)
-    study.histories = _histories(src, study, s.get("history", []))
-    if "ida" in s:
-        study.ida = _ida(src, s["ida"], study)
-    # every cell's Wall must be valid: build them now, before any computation
-    for spec in walls:
-        for d in diaphragms:
-            for z in extra.get("damping", [None]):
+        pairs[w] = rs
+    return pairs
+
+
+def _check_cells(src: _Source, study: Study) -> None:
+    """Every cell's Wall must be valid: build them now, before any computation."""
+    for spec in study.walls:
+        for d in study.diaphragms:
+            for z in study.extra.get("damping", [None]):
                 try:
                     study.wall(spec, d, z)
                 except ValueError as exc:
                     raise src.error("study", f"wall {spec.id!r} on diaphragm {d.id!r}: {exc}",
                                     "walls") from None
-    return study
 
 
 def _histories(src: _Source, study: Study, entries: list) -> list[History]:

@@ -54,16 +54,16 @@ def benchmark_wall(**changes: Any) -> Wall:
 
 
 def load_record(record_id: str, window: float | None = None) -> tuple[np.ndarray, float, float]:
-    """(samples [m s-2], dt [s], manifest scale factor) of a manifest record, optionally
+    """(samples [m s-2], dt [s], manifest scale factor) of a manifest record
+    (`urmx.records.as_record`: unscaled samples, the scale factor beside them), optionally
     only its first `window` seconds."""
-    from .records import load
+    from .records.record import as_record
 
-    trace = load(record_id)
-    ag = np.ascontiguousarray(trace.data, dtype=np.float64)
-    dt = float(trace.stats.delta)
+    rec = as_record(record_id)
+    ag = rec.acceleration
     if window is not None:
-        ag = ag[:int(round(window / dt)) + 1]
-    return ag, dt, float(trace.stats.record.scale_factor)
+        ag = ag[:int(round(window / rec.dt)) + 1]
+    return ag, rec.dt, rec.scale_factor
 
 
 def median_time(fn: Callable[[], Any], repeat: int = 5, min_time: float = 0.0,

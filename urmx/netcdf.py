@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from .errors import writing
+
+if TYPE_CHECKING:  # xarray is not imported here: the fill value is read on workers too
+    import xarray as xr
 
 #: fill value on disk of the integer and flag outputs (`urmx.variables.INTEGER_OUTPUTS`) of
 #: study cells without a valid result

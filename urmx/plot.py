@@ -1,5 +1,5 @@
-"""Matplotlib figures of the paper (Figs. 5-10) and of one analysis, one function per
-figure kind.
+"""Matplotlib figures of the paper (Figs. 5-10), of one analysis and of IDA archives (the
+collapse fragility), one function per figure kind.
 
 Each function takes the labelled objects of :mod:`urmx.analysis`, draws on ``ax=`` (or
 ``axes=``) when given and otherwise on a new :class:`matplotlib.figure.Figure` (no
@@ -9,6 +9,7 @@ as ``long_name [units]`` and returns the axes it drew on.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -16,11 +17,19 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from . import fragility_analysis as FA
 from .errors import InputError
 from .model import PAPER_G
 
 PANEL = (5.0, 3.6)  # inches per panel
 DISPLAY_UNITS = {"m": ("mm", 1e3), "m s-2": ("g", 1.0 / PAPER_G)}  # SI -> what engineers compare
+
+
+def display_scale(units: str) -> tuple[float, str]:
+    """(factor, units label) to show a quantity stored in `units` as engineers compare it
+    (`DISPLAY_UNITS`: m s-2 in g, m in mm); other units as they are."""
+    label, factor = DISPLAY_UNITS.get(units, (units, 1.0))
+    return factor, label
 
 
 def in_display_units(obj):
@@ -250,3 +259,166 @@ def plot_simulation(ds: xr.Dataset, axes: Sequence[Axes] | None = None) -> list[
                         f"cor {ds.attrs['cor']:g}, peak u_t "
                         f"{1e3 * float(ds['peak_top_displacement']):.1f} mm")
     return [ax1, ax2]
+
+
+# ---- collapse fragility (IDA archives, `urmx.fragility_analysis`) ---------------------------
+
+def _im_scale(ds: xr.Dataset) -> tuple[float, str]:
+    """Factor and unit label to show an IDA archive's intensity measure in."""
+    return display_scale(ds.collapse_intensity.attrs.get("units", ""))
+
+
+def plot_ida_curves(ds: xr.Dataset, diaphragm: str, axes=None) -> list:
+    """IDA curves (instability ratio against intensity) of every record, one panel per
+    wall, for one diaphragm and the first COR."""
+    f, unit = _im_scale(ds)
+    d = FA.first_cor(ds).sel(diaphragm=diaphragm)
+    walls = list(d.wall.values)
+    axes = panels(axes, len(walls), ncols=3)
+    for ax, w in zip(axes, walls, strict=True):
+        c = d.sel(wall=w)
+        for r in c.record.values:
+            cell = c.sel(record=r)
+            x = cell.instability_ratio.values
+            y = cell.intensity.values * f
+            ok = np.isfinite(x)
+            ax.plot(x[ok], y[ok], color="0.55", lw=0.6, alpha=0.7)
+            cap = float(cell.collapse_intensity) * f
+            if float(cell.censored) == 0:  # a collapse (1: censored; NaN: not run)
+                ax.plot([1.0], [cap], "o", ms=2.5, color="C3")
+        med = float(c.median_collapse_intensity) * f
+        if np.isfinite(med):
+            ax.axhline(med, color="C0", ls="--", lw=1.2, label=f"median {med:.3g} {unit}")
+            ax.legend(fontsize="x-small", loc="upper left")
+        ax.set_title(f"{w} (h/t {float(c.slenderness):.0f}) on {diaphragm}", fontsize=9)
+        ax.set_xlim(0, 1.05)
+        ax.set_xlabel("instability ratio [1]")
+        ax.set_ylabel(f"{ds.attrs.get('intensity_measure', 'intensity')} [{unit}]")
+        ax.grid(True, alpha=0.3)
+    return axes
+
+
+def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
+    """Fitted collapse fragility of each wall (colour by slenderness), one panel per
+    diaphragm, with the records' capacities as empirical distributions (dots)."""
+    from scipy.stats import norm
+
+    f, unit = _im_scale(ds)
+    d = FA.first_cor(ds)
+    labels = [str(x) for x in d.diaphragm.values]
+    axes = panels(axes, len(labels), ncols=3)
+    top = float(np.nanmax(d.collapse_intensity.where(d.censored == 0))) * f * 1.2
+    x = np.linspace(1e-3, top, 300)
+    cmap = _slenderness_colors(d)
+    for ax, lab in zip(axes, labels, strict=True):
+        for w in d.wall.values:
+            c = d.sel(diaphragm=lab, wall=w)
+            med, beta = float(c.median_collapse_intensity) * f, float(c.dispersion)
+            col = cmap[str(w)]
+            if np.isfinite(med):
+                ax.plot(x, norm.cdf(np.log(x / med) / beta), color=col, lw=1.2,
+                        label=f"{w}")
+            cap = np.sort(c.collapse_intensity.where(c.censored == 0).values * f)
+            cap = cap[np.isfinite(cap)]
+            n = c.record.size
+            ax.plot(cap, (np.arange(cap.size) + 0.5) / n, ".", ms=2, color=col, alpha=0.6)
+        ax.set_title(lab, fontsize=9)
+        ax.set_xlabel(f"{ds.attrs.get('intensity_measure', 'intensity')} [{unit}]")
+        ax.set_ylabel("probability of collapse [1]")
+        ax.set_ylim(0, 1)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize="x-small", ncol=2, title="wall")
+    return axes
+
+
+def _log_x(ax) -> None:
+    """A log x-axis labelled at 1, 2 and 5 times the powers of ten, as plain numbers."""
+    from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
+
+    ax.set_xscale("log")
+    ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def _slenderness_colors(ds) -> dict[str, tuple]:
+    from matplotlib import colormaps
+
+    cmap = colormaps["viridis"]
+    s = ds.slenderness.values
+    span = max(float(np.ptp(s)), 1e-9)
+    return {str(w): cmap(0.9 * (float(v) - s.min()) / span)
+            for w, v in zip(ds.wall.values, s, strict=True)}
+
+
+def plot_median(ds: xr.Dataset, against: str = "slenderness", axes=None) -> list:
+    """Median collapse intensity against ``slenderness`` (one line per diaphragm) or
+    against the diaphragm's ``frequency`` (one line per wall; rigid supports left out),
+    one panel per supports group."""
+    f, unit = _im_scale(ds)
+    d = FA.first_cor(ds)
+    groups = FA.supports_groups(d)
+    axes = panels(axes, len(groups), ncols=2)
+    cmap = _slenderness_colors(d)
+    for ax, (g, labels) in zip(axes, groups.items(), strict=True):
+        med = d.median_collapse_intensity.sel(diaphragm=labels) * f
+        if against == "slenderness":
+            for lab in labels:
+                ax.plot(d.slenderness, med.sel(diaphragm=lab), "o-", ms=3, label=lab)
+            ax.set_xlabel("slenderness h/t [1]")
+            ax.legend(fontsize="x-small", title="diaphragm")
+        else:
+            freq = d.cell_frequency.sel(diaphragm=labels)
+            for w in d.wall.values:
+                fx = freq.sel(wall=w).values
+                ok = np.isfinite(fx)
+                ax.plot(fx[ok], med.sel(wall=w).values[ok], "o-", ms=3, color=cmap[str(w)],
+                        label=str(w))
+            _log_x(ax)
+            ax.set_xlabel("diaphragm frequency (Table IV SDOF) [Hz]")
+            ax.legend(fontsize="x-small", ncol=3, title="wall", loc="best")
+        ax.set_ylabel(f"median collapse {ds.attrs.get('intensity_measure', '')} [{unit}]")
+        ax.set_title(FA.GROUPS.get(g, g), fontsize=9)
+        ax.grid(True, alpha=0.3)
+    return axes
+
+
+def plot_capacity_resonance(t: xr.Dataset, axes=None) -> list:
+    """Each capacity relative to the same wall and record on the group's other flexible
+    diaphragms against the ratio of the record's predominant frequency to the diaphragm's
+    (`urmx.fragility_analysis.resonance_table`), with the binned medians; one panel per
+    supports group."""
+    groups = [g for g in FA.GROUPS if g in set(t.group.values)]
+    axes = panels(axes, max(1, len(groups)), ncols=2)
+    for ax, g in zip(axes, groups, strict=False):
+        sel = t.group.values == g
+        x, y = t.frequency_ratio.values[sel], np.exp(t.log_ratio.values[sel])
+        ax.plot(x, y, ".", ms=2, alpha=0.35, color="0.4")
+        b = FA.binned(t, g)
+        xs = [math.sqrt(lo * hi) if np.isfinite(hi) and lo > 0 else (hi / 2 if lo == 0 else
+              lo * 2) for lo, hi, _, _ in b]
+        ax.plot(xs, [math.exp(m) for *_, m in b], "o-", color="C3", label="binned median")
+        ax.axvline(1.0, color="k", lw=0.8, ls=":")
+        ax.axhline(1.0, color="k", lw=0.8)
+        _log_x(ax)
+        ax.set_xlabel("record predominant frequency / diaphragm frequency [1]")
+        ax.set_ylabel("relative collapse intensity [1]")
+        ax.set_title(FA.GROUPS.get(g, g), fontsize=9)
+        ax.legend(fontsize="x-small")
+        ax.grid(True, alpha=0.3, which="both")
+    return axes
+
+
+def plot_stiffening(st: dict, ds: xr.Dataset, ax=None):
+    """The ratio of median collapse intensities, stiffened over as-built diaphragm, against
+    slenderness (`urmx.fragility_analysis.stiffening`), one line per supports group."""
+    ax = ax if ax is not None else panels(None, 1)[0]
+    for g, v in st.items():
+        ax.plot(ds.slenderness, v["ratio"], "o-", ms=3,
+                label=f"{FA.GROUPS.get(g, g).split(' (')[0]}: {v['stiff']} / {v['soft']}")
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_xlabel("slenderness h/t [1]")
+    ax.set_ylabel("median ratio, stiffened / as built [1]")
+    ax.legend(fontsize="x-small")
+    ax.grid(True, alpha=0.3)
+    return ax

@@ -14,14 +14,13 @@ from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from . import __version__, variables
-from .errors import InputError, MissingFileError
+from .errors import InputError
 from .model import Wall
 
 METHODS = ("exact", "reference")
@@ -33,27 +32,13 @@ _SI_UNITS = {"m/s2", "m/s**2", "m/s^2", "m s-2", "m.s-2", "m/(s*s)"}
 def load_record(record: str | os.PathLike, records_dir: str | os.PathLike | None = None):
     """A record named by a string: a record file (one channel) or a manifest record id.
 
-    Returns an ObsPy Trace in m s-2 (unscaled). Raises :class:`urmx.errors.MissingFileError`
-    naming `record` when it is neither an existing file nor a manifest id.
+    Returns an ObsPy Trace in m s-2 (unscaled; `urmx.records.record.load_named`, the one
+    reading of a record's name). Raises :class:`urmx.errors.MissingFileError` naming
+    `record` when it is neither an existing file nor a manifest id.
     """
-    from . import records
+    from .records.record import load_named
 
-    path = Path(record)
-    if path.is_file():
-        stream = records.read(path)
-        if len(stream) != 1:
-            ids = ", ".join(tr.id for tr in stream)
-            raise InputError(f"record file {str(record)!r} holds {len(stream)} channels "
-                             f"({ids}); give a file with one channel")
-        return stream[0]
-    try:
-        known = records.manifest(records_dir)
-    except MissingFileError:
-        known = {}
-    if str(record) not in known:
-        raise MissingFileError(f"record {str(record)!r} is neither a file nor a manifest "
-                               "record id (see `urmx records list`)")
-    return records.load(str(record), records_dir)
+    return load_named(record, records_dir)
 
 
 def _record(ground_acceleration: Any, dt: float | None) -> tuple[Any, float | None, str]:

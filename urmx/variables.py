@@ -89,23 +89,25 @@ def templated(entry: dict[str, str]) -> bool:
     return any("{" in str(v) for v in entry.values())
 
 
+def intensity_measures() -> tuple[str, ...]:
+    """The intensity measures of the registry (its ``im.<name>`` entries), in its order."""
+    return tuple(key[3:] for key in registry() if key.startswith("im."))
+
+
 def intensity_context(im: str) -> dict[str, str]:
-    """The placeholders ``im_units`` and ``im_name`` of an intensity measure
-    (`urmx.fragility.IM_ATTRS`) for :func:`attrs`.
+    """The placeholders ``im_units`` and ``im_name`` of an intensity measure (the units and
+    long name of its ``im.<name>`` entry) for :func:`attrs`.
 
     Raises
     ------
     KeyError
         An unknown intensity measure.
     """
-    from .fragility import IM_ATTRS
-
-    try:
-        units, long_name = IM_ATTRS[im]
-    except KeyError:
+    entry = registry().get(f"im.{im}")
+    if entry is None:
         raise KeyError(f"unknown intensity measure {im!r} (known: "
-                       f"{', '.join(IM_ATTRS)})") from None
-    return {"im_units": units, "im_name": long_name}
+                       f"{', '.join(intensity_measures())})")
+    return {"im_units": entry["units"], "im_name": entry["long_name"]}
 
 
 def stamp(obj, scope: str | None = None):

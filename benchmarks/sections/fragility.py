@@ -129,7 +129,9 @@ def brute_force(study, pairs, records: list[str] | None = None) -> dict:
     from urmx import fragility as F
     from urmx.kernel import run
 
-    recs = {r: F.as_record(r) for r in (records or study.records)}
+    # each record as analysed (times its manifest scale factor), as one Record
+    recs = {r: F.Record(r, rec.scaled(), rec.dt) for r, rec in
+            ((r, F.as_record(r)) for r in (records or study.records))}
     walls = {w.id: w for w in study.walls}
     dias = {d.id: d for d in study.diaphragms}
     cells, fits = [], []
@@ -138,15 +140,15 @@ def brute_force(study, pairs, records: list[str] | None = None) -> dict:
         w = study.wall(walls[wid], dias[did])
         search, scan = [], []
         for rid, rec in recs.items():
-            res = F.collapse_capacity(w, rec, im=study.ida.im, rtol=study.ida.rtol,
-                                      step=study.ida.step,
-                                      max_intensity=study.ida.max_intensity)
+            res = F.collapse_capacity(w, rec, im=study.settings.im, rtol=study.settings.rtol,
+                                      step=study.settings.step,
+                                      max_intensity=study.settings.max_intensity)
             pga = float(np.max(np.abs(rec.acceleration)))
             lo = SCAN_FROM * F.static_acceleration(w)
             n = max(2, int(math.ceil(math.log(res.capacity / lo) / math.log(SCAN_STEP))))
             first = res.capacity
             for x in lo * SCAN_STEP ** np.arange(n):
-                if x >= res.capacity / (1 + study.ida.rtol):
+                if x >= res.capacity / (1 + study.settings.rtol):
                     break
                 if run(w, rec.acceleration, rec.dt, scale=x / pga, cor=0.8)["status"] \
                         == "collapsed":
@@ -154,7 +156,7 @@ def brute_force(study, pairs, records: list[str] | None = None) -> dict:
                     break
             search.append(res.capacity)
             scan.append(first)
-            plain, n_plain = _plain(w, rec, res.record_intensity, study.ida)
+            plain, n_plain = _plain(w, rec, res.record_intensity, study.settings)
             cells.append({"wall": wid, "diaphragm": did, "record": rid,
                           "capacity": res.capacity, "scan_first": first,
                           "censored": res.censored, "analyses": res.analyses,
@@ -170,7 +172,7 @@ def brute_force(study, pairs, records: list[str] | None = None) -> dict:
     first = np.minimum([c["scan_first"] for c in cells], [c["capacity"] for c in cells])
     plain = np.array([c["plain_capacity"] for c in cells])
     plain_over = plain / np.minimum(first, plain)
-    plain_missed = plain_over > 1 + 2 * study.ida.rtol  # the same transition within rtol
+    plain_missed = plain_over > 1 + 2 * study.settings.rtol  # the same transition within rtol
     return {
         "plain": {"step": PLAIN_STEP,
                   "analyses_per_capacity": float(np.mean([c["plain_analyses"] for c in cells])),

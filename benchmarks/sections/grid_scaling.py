@@ -23,6 +23,7 @@ def synthetic_study(n_cor: int, n_scale: int, duration: float = 5.0, dt: float =
     """(Study, records) of a synthetic grid: the catalog's parametric walls x diaphragms
     D1-D5 (single storey) x the synthetic record x `n_cor` CORs x `n_scale` scale factors."""
     from urmx.catalog import Study, load_catalog
+    from urmx.records import Record
 
     cat = load_catalog()
     acc = synthetic_record(duration, dt)
@@ -34,7 +35,7 @@ def synthetic_study(n_cor: int, n_scale: int, duration: float = 5.0, dt: float =
         cor=[round(float(c), 6) for c in np.linspace(0.6, 0.95, n_cor)],
         extra={"scale": [round(float(s), 6) for s in np.linspace(0.2, 1.2, n_scale)]})
     digest = hashlib.sha256(acc.tobytes()).hexdigest()[:16]
-    records = {"synthetic": S.RecordData("synthetic", acc, dt, 1.0, digest)}
+    records = {"synthetic": Record("synthetic", acc, dt, 1.0, digest)}
     return study, records
 
 

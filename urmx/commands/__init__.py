@@ -1,0 +1,2 @@
+"""The ``urmx`` subcommands, one module each with ``register(subparsers)`` (`urmx.cli`
+registers them)."""

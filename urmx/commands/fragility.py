@@ -1,5 +1,5 @@
-"""``urmx ida STUDY --out FILE.nc`` and ``urmx fragility-report FILE.nc``: thin commands over
-urmx.fragility (collapse capacities on a study grid; figures and tables of an archive)."""
+"""``urmx ida STUDY --out FILE.nc`` (an alias of ``urmx run`` for IDA studies) and ``urmx
+fragility-report FILE.nc`` (figures and tables of an IDA archive): thin commands."""
 
 from __future__ import annotations
 
@@ -8,12 +8,13 @@ def register(sub) -> None:
     from .study import study_options
 
     p = sub.add_parser(
-        "ida", help="collapse capacities of a study with [study.ida] into a netCDF archive "
-                    "(resumable)",
-        description="Run one collapse capacity (hunt and bisection on the record's scale "
-                    "factor) per (wall, diaphragm, record, cor) cell of a study whose file has "
-                    "an [study.ida] table, and write the archive with the lognormal fits. "
-                    "Interrupted runs resume: run the same command again.")
+        "ida", help="alias of `urmx run` for a study with [study.ida]: collapse capacities "
+                    "into a netCDF archive (resumable)",
+        description="`urmx run` for a study whose file has an [study.ida] table (it refuses "
+                    "any other): one collapse capacity (hunt and bisection on the record's "
+                    "scale factor) per (wall, diaphragm, record, cor) cell, and the archive "
+                    "with the lognormal fits. Interrupted runs resume: run the same command "
+                    "again.")
     p.add_argument("study", help="study TOML file with [study.ida], or the name of a catalog "
                                  "study (fema-p695-ida)")
     p.add_argument("--out", required=True, help="netCDF archive to write (FILE.nc)")
@@ -32,24 +33,18 @@ def register(sub) -> None:
 
 
 def _ida(args) -> int:
-    from pathlib import Path
-
     from ..catalog import load_study
     from ..errors import InputError, check_output
-    from ..study import check_scheduler, run_study
-    from .study import command_line, run_resumable
+    from ..study import check_scheduler
+    from .study import run_loaded
 
     check_output(args.out, "--out")
     check_scheduler(args.scheduler)
     study = load_study(args.study)
-    if study.ida is None:
+    if study.kind != "ida":
         raise InputError(f"{study.path}: study {study.name!r} has no [study.ida] table (im, "
                          "rtol, step, max_intensity); add one, or run it with `urmx run`")
-    run_resumable(args, Path(args.out), lambda: run_study(
-        study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
-        batch_size=args.batch_size, records_dir=args.records, command=command_line()))
-    print(args.out)
-    return 0
+    return run_loaded(args, study)
 
 
 def _report(args) -> int:

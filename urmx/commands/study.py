@@ -7,12 +7,10 @@ import sys
 import time
 from pathlib import Path
 
-PAPER_STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
-                 "verification-intensity")
-
 
 def register(sub) -> None:
-    p = sub.add_parser("run", help="run a study file into a netCDF archive (resumable)")
+    p = sub.add_parser("run", help="run a study file of any kind into a netCDF archive "
+                       "(resumable)")
     p.add_argument("study", help="study TOML file, or the name of a catalog study")
     p.add_argument("--out", required=True, help="netCDF archive to write (FILE.nc)")
     study_options(p)
@@ -89,10 +87,16 @@ def run_resumable(args, out: Path, run) -> None:
 
 
 def _run(args) -> int:
+    return run_loaded(args, args.study)
+
+
+def run_loaded(args, study) -> int:
+    """Run a study of any kind (a loaded study, a file or a catalog name) into ``--out``,
+    as ``urmx run`` does (its aliases call this too)."""
     from ..study import run_study
 
     run_resumable(args, Path(args.out), lambda: run_study(
-        args.study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
+        study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
         batch_size=args.batch_size, records_dir=args.records, command=command_line()))
     print(args.out)
     return 0
@@ -101,6 +105,7 @@ def _run(args) -> int:
 def _paper(args) -> int:
     from ..config import records_dir
     from ..errors import check_output, writing
+    from ..paper import STUDIES
     from ..report import write_report
     from ..study import check_scheduler, close_client, get_client, run_study
 
@@ -112,9 +117,9 @@ def _paper(args) -> int:
     archives = []
     client, owned = (None, False)
     if args.scheduler != "serial":
-        client, owned = get_client(args.scheduler)  # one cluster for all three studies
+        client, owned = get_client(args.scheduler)  # one cluster for all the studies
     try:
-        for name in PAPER_STUDIES:
+        for name in STUDIES:
             path = out / f"{name}.nc"
             print(f"urmx paper: {name} -> {path}", file=sys.stderr)
             run_resumable(args, path, lambda name=name, path=path: run_study(

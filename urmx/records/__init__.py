@@ -8,6 +8,7 @@ Public API::
     rf = describe("RSN763_LOMAP_GIL067.AT2")        # one channel + sha256, format, unit, dt
     ds = measures(tr)                               # pga, pgv, pgd, arias_intensity, ...
     rs = response_spectrum(tr)                      # psa(period), 5 % damping
+    rec = as_record("nahanni")                      # Record: samples, dt, scale factor
 """
 
 from .errors import (
@@ -51,11 +52,13 @@ from .readers import (
     read,
     read_channel,
 )
+from .record import Record, as_record
 
 __all__ = [
     "read", "read_channel", "detect_format", "describe", "describe_all", "RecordFile",
     "check_finite",
     "load", "load_samples", "manifest", "index", "write_manifest", "measures",
+    "Record", "as_record",
     "response_spectrum",
     "fourier_spectrum", "significant_frequency_range", "significant_duration",
     "predominant_frequency", "arias_history", "sdof_displacement",

@@ -16,6 +16,7 @@ from ..errors import InputError
 from ..jitcache import jit
 from ..variables import attrs, stamp
 from .readers import STANDARD_GRAVITY, check_finite
+from .record import Record, as_record
 
 if TYPE_CHECKING:  # xarray is imported where a result is built: reading a record stays light
     import xarray as xr
@@ -29,25 +30,16 @@ DEFAULT_FREQUENCIES = np.geomspace(0.05, 50.0, 300)
 
 
 def as_trace(record):
-    """An :class:`obspy.Trace` from a Trace (returned as it is) or an ``(array, dt)`` pair
-    of acceleration samples [m s-2] and their time step [s]."""
+    """An :class:`obspy.Trace` from a Trace (returned as it is), a
+    `urmx.records.record.Record` or an ``(array, dt)`` pair of acceleration samples
+    [m s-2] and their time step [s] (checked by `urmx.records.record.as_record`)."""
     if hasattr(record, "stats") and hasattr(record, "data"):
         return record
-    if isinstance(record, (tuple, list)) and len(record) == 2:
+    if isinstance(record, Record) or (isinstance(record, (tuple, list)) and len(record) == 2):
         from obspy import Trace
 
-        acc, dt = record
-        acc = np.asarray(acc, dtype=float)
-        try:
-            dt = float(dt)
-        except (TypeError, ValueError):
-            raise InputError(f"dt={dt!r} must be a number of seconds") from None
-        if acc.ndim != 1 or acc.size < 2:
-            raise InputError(f"acceleration must be a 1-D array of at least 2 samples "
-                             f"(got shape {acc.shape})")
-        if not (np.isfinite(dt) and dt > 0):
-            raise InputError(f"dt={dt!r} must be a positive time step in seconds")
-        return Trace(data=acc, header={"delta": dt})
+        rec = as_record(record)
+        return Trace(data=rec.acceleration, header={"delta": rec.dt})
     raise InputError(f"expected an obspy Trace or an (array, dt) pair, not "
                      f"{type(record).__name__}")
 
@@ -71,6 +63,11 @@ def _check_damping(damping) -> float:
         raise InputError(f"damping={damping!r} must be a ratio in (0, 1) (0.05 = 5 % of "
                          "critical)")
     return z
+
+
+def velocity(acceleration, dt: float) -> np.ndarray:
+    """Ground velocity by the trapezoidal rule from rest, numpy only (no Trace). [m s-1]"""
+    return _cumtrapz(np.asarray(acceleration, dtype=float), float(dt))
 
 
 def _cumtrapz(y, dt):
@@ -126,6 +123,18 @@ def _konno_ohmachi(freq, amp, centres, bandwidth):
     return out
 
 
+def smoothed_fourier_amplitude(acceleration, dt: float, frequencies=None,
+                               bandwidth: float = 40.0) -> tuple[np.ndarray, np.ndarray]:
+    """`fourier_spectrum` as numpy arrays (no Trace, no xarray): (frequency [Hz], smoothed
+    amplitude [m s-1])."""
+    acc = np.asarray(acceleration, dtype=float)
+    freq, amp = _fas(acc, dt)
+    centres = np.asarray(DEFAULT_FREQUENCIES if frequencies is None else frequencies, float)
+    # below two FFT bins the smoothed spectrum is not resolved by the record length
+    centres = centres[(centres >= 2.0 / (acc.size * dt)) & (centres <= 0.5 / dt)]
+    return centres, _konno_ohmachi(freq, amp, centres, bandwidth)
+
+
 def fourier_spectrum(trace, frequencies=None, bandwidth: float = 40.0) -> xr.DataArray:
     """Konno-Ohmachi-smoothed Fourier amplitude spectrum of the acceleration.
 
@@ -147,11 +156,7 @@ def fourier_spectrum(trace, frequencies=None, bandwidth: float = 40.0) -> xr.Dat
     import xarray as xr
 
     acc, dt = _series(trace)
-    freq, amp = _fas(acc, dt)
-    centres = np.asarray(DEFAULT_FREQUENCIES if frequencies is None else frequencies, float)
-    # below two FFT bins the smoothed spectrum is not resolved by the record length
-    centres = centres[(centres >= 2.0 / (acc.size * dt)) & (centres <= 0.5 / dt)]
-    smooth = _konno_ohmachi(freq, amp, centres, bandwidth)
+    centres, smooth = smoothed_fourier_amplitude(acc, dt, frequencies, bandwidth)
     fas = xr.DataArray(smooth, dims="frequency", name="fourier_amplitude",
                        coords={"frequency": centres},
                        attrs={"smoothing": f"Konno-Ohmachi b={bandwidth:g}"})
@@ -187,8 +192,13 @@ def significant_frequency_range(trace, low: float = 0.05, high: float = 0.95):
 
 def predominant_frequency(trace) -> float:
     """Frequency of the peak of the smoothed Fourier amplitude spectrum [Hz]."""
-    fas = fourier_spectrum(trace)
-    return float(fas.frequency.values[int(np.argmax(fas.values))])
+    return dominant_frequency(*_series(trace))
+
+
+def dominant_frequency(acceleration, dt: float) -> float:
+    """`predominant_frequency` of samples [m s-2] at time step `dt` [s], numpy only. [Hz]"""
+    centres, smooth = smoothed_fourier_amplitude(acceleration, dt)
+    return float(centres[int(np.argmax(smooth))])
 
 
 # -- response spectrum: exact piecewise-linear recursion -------------------------------
@@ -304,9 +314,27 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     """
     import xarray as xr
 
-    damping = _check_damping(damping)
     acc, dt = _series(as_trace(trace))
     periods = np.asarray(DEFAULT_PERIODS if periods is None else periods, dtype=float)
+    out = _spectrum(acc, dt, periods, damping)
+    damping = out.pop("damping")
+    ds = xr.Dataset({k: ("period", v) for k, v in out.items()}, coords={"period": periods},
+                    attrs={"damping": damping,
+                           "method": "Nigam-Jennings exact piecewise-linear recursion"})
+    return stamp(ds, scope="spectrum")
+
+
+def pseudo_spectral_acceleration(acceleration, dt: float, periods,
+                                 damping: float = 0.05) -> np.ndarray:
+    """``psa`` of `response_spectrum` at `periods` [s] (0: the PGA) as a numpy array, from
+    samples [m s-2] at time step `dt` [s] (no Trace, no xarray). [m s-2]"""
+    acc = np.asarray(acceleration, dtype=float)
+    return _spectrum(acc, float(dt), np.asarray(periods, dtype=float), damping)["psa"]
+
+
+def _spectrum(acc, dt, periods, damping) -> dict:
+    """sd, psv, psa, sa over `periods` and the checked damping ratio."""
+    damping = _check_damping(damping)
     bad = periods[~(np.isfinite(periods) & (periods >= 0))]
     if bad.size:
         raise InputError(f"response_spectrum: period {bad[0]!r} s is not a finite period "
@@ -323,11 +351,7 @@ def response_spectrum(trace, periods=None, damping: float = 0.05) -> xr.Dataset:
     w = np.zeros(periods.size)
     w[pos] = omega
     psa = np.where(pos, w * w * sd, pga)
-    ds = xr.Dataset(
-        {"sd": ("period", sd), "psv": ("period", w * sd), "psa": ("period", psa),
-         "sa": ("period", sa)}, coords={"period": periods},
-        attrs={"damping": damping, "method": "Nigam-Jennings exact piecewise-linear recursion"})
-    return stamp(ds, scope="spectrum")
+    return {"sd": sd, "psv": w * sd, "psa": psa, "sa": sa, "damping": damping}
 
 
 # -- all scalar measures ---------------------------------------------------------------

@@ -1,0 +1,221 @@
+"""Study kinds are plug-ins: a toy kind defined here in a few lines and registered from
+outside the package (`urmx.study.kinds.register`) runs through `urmx.run_study` with an
+archive, the lock, progress and a resume after a SIGKILL of the process running it, with no
+edit to the engine, the catalog or the registry's other entries; and each built-in kind's
+batch runs on numpy alone (a fresh process running one imports no xarray, dask or ObsPy)."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import urmx
+from urmx.catalog import CatalogError, load_study
+from urmx.errors import RunError
+from urmx.study import Lock, kinds
+from urmx.study.batches import by_walls
+from urmx.study.dataset import cell_array, grid_coords
+from urmx.study.parts import task_key
+
+# ---- the toy kind: value = gain * record peak * wall height * cor, one value per cell -------
+
+SLEEP = "URMX_TOY_SLEEP"  # seconds a toy batch takes (the killed process reads it)
+RUNS: list[int] = []  # batches run in this process
+
+
+def toy_parse(study):
+    gain = study.tables["toy"].get("gain", 1.0)
+    if isinstance(gain, bool) or not isinstance(gain, (int, float)) or gain <= 0:
+        raise study.error("study.toy.gain", f"{gain!r} must be a positive number", "toy",
+                          "gain")
+    return float(gain)
+
+
+def toy_tasks(study, records, batch_size, kernel):
+    out = []
+    for batch in by_walls(study, study.dims, batch_size):
+        task = {"heights": [study.walls[i].wall.height for i in batch.walls],
+                "diaphragm": study.diaphragms[batch.diaphragm].id, "cor": list(study.cor),
+                "gain": study.settings}
+        batch.key = task_key(task, records[study.records[batch.record]], prefix="toy-")
+        out.append((batch, task))
+    return out
+
+
+def toy_run(task, acceleration):
+    time.sleep(float(os.environ.get(SLEEP, "0")))
+    RUNS.append(1)
+    peak = float(np.max(np.abs(acceleration)))
+    return {"value": task["gain"] * peak * np.outer(task["heights"], task["cor"])}
+
+
+def toy_assemble(study, records, tasks, results, attrs):
+    shape = tuple(len(v) for v in study.dims.values())
+    value = cell_array(shape, [b for b, _ in tasks], results, "value",
+                       lambda v, b: v.reshape(v.shape[0], 1, 1, -1))
+    return xr.Dataset({"value": (list(study.dims), value)}, attrs=attrs,
+                      coords=grid_coords(study, records))
+
+
+TOY = kinds.register(kinds.Kind(name="toy", table="toy", unit="cells", outputs=("value",),
+                                parse=toy_parse, tasks=toy_tasks, run=toy_run,
+                                assemble=toy_assemble))
+
+# ---- the tests -------------------------------------------------------------------------------
+
+DT = 0.01
+ACC = {"quake": np.r_[np.zeros(5), 2.0, -1.0, np.zeros(43)],
+       "shake": np.r_[np.zeros(5), -3.0, 1.0, np.zeros(43)]}
+SCALE = {"quake": 1.0, "shake": 1.0}
+STUDY = """\
+[study]
+name = "toy-study"
+walls = ["s08", "s16", "s24"]
+diaphragms = ["D1", "D4"]
+records = ["quake", "shake"]
+cor = [0.7, 0.8]
+
+[study.toy]
+gain = 2.0
+"""
+BATCHES = 12  # 3 walls x 2 diaphragms x 2 records, one wall a batch (batch_size 1 < 2 cor)
+
+
+@pytest.fixture
+def toy(make_study, use_records):
+    use_records(ACC, SCALE, DT)
+    RUNS.clear()
+    return make_study(STUDY, "toy.toml")
+
+
+def _same(a: xr.Dataset, b: xr.Dataset) -> None:
+    a, b = a.copy(), b.copy()
+    for ds in (a, b):
+        ds.attrs["history"] = ds.attrs["history"].split(" ", 1)[1]
+    xr.testing.assert_identical(a, b)
+
+
+def test_a_kind_registered_from_outside_runs_into_an_archive(toy, tmp_path):
+    study = load_study(toy)
+    assert (study.kind, study.settings) == ("toy", 2.0)
+    out = tmp_path / "toy.nc"
+    ds = urmx.run_study(toy, out=out, scheduler="serial", progress=False, batch_size=1)
+    assert len(RUNS) == BATCHES and not (tmp_path / "toy.nc.parts").exists()
+    cell = ds.value.sel(wall="s16", diaphragm="D4", record="shake", cor=0.8)
+    assert float(cell) == pytest.approx(2.0 * 3.0 * 16 * 0.23 * 0.8, rel=1e-12)
+    assert ds.value.dims == ("wall", "diaphragm", "record", "cor")
+    assert ds.attrs["study_name"] == "toy-study"
+    _same(ds, urmx.open_study(out).load())
+    assert [k.name for k in kinds.registered()][:2] == ["grid", "ida"]  # built-ins untouched
+
+
+def test_the_catalog_refuses_tables_no_kind_reads_and_lets_the_kind_parse(make_study):
+    path = make_study(STUDY.replace("[study.toy]", "[study.nokind]"), "bad.toml")
+    with pytest.raises(CatalogError, match=r"bad\.toml:8: study\.nokind: unknown key"):
+        load_study(path)
+    path = make_study(STUDY.replace("gain = 2.0", "gain = -1"), "bad.toml")
+    with pytest.raises(CatalogError, match=r"bad\.toml:9: study\.toy\.gain: -1 must be"):
+        load_study(path)
+    path = make_study(STUDY + '[study.ida]\nim = "pga"\n', "both.toml")
+    with pytest.raises(CatalogError, match="make no one study kind"):
+        load_study(path)
+
+
+def test_the_lock_and_progress_hold_for_the_toy_kind(toy, tmp_path):
+    out = tmp_path / "busy.nc"
+    with Lock(tmp_path / "busy.nc.parts", out), \
+            pytest.raises(RunError, match=r"another urmx run \(pid \d+"):
+        urmx.run_study(toy, out=out, scheduler="serial", progress=False)
+    assert RUNS == []
+    err = io.StringIO()
+    saved, sys.stderr = sys.stderr, err
+    try:
+        urmx.run_study(toy, out=out, scheduler="serial", progress=True, batch_size=1)
+    finally:
+        sys.stderr = saved
+    lines = err.getvalue().splitlines()
+    assert lines[0].startswith("urmx toy-study:   0% 0/24")  # 24 cells
+    assert lines[-1].startswith("urmx toy-study: 100% 24/24") and "cells/s" in lines[-1]
+
+
+RUN = """\
+import sys
+import urmx
+import tests.test_kinds as T
+from tests.fixtures.pinned import served
+
+with served(T.ACC, T.SCALE, T.DT):
+    urmx.run_study(sys.argv[1], out=sys.argv[2], scheduler="serial", progress=False,
+                   batch_size=1)
+"""
+
+
+def test_the_toy_kind_resumes_after_its_run_is_killed(toy, tmp_path):
+    root = Path(__file__).resolve().parent.parent
+    out = tmp_path / "killed.nc"
+    parts = tmp_path / "killed.nc.parts"
+    env = dict(os.environ, **{SLEEP: "0.5"})
+    proc = subprocess.Popen([sys.executable, "-c", RUN, str(toy), str(out)], cwd=root,
+                            env=env, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None \
+            and len(list(parts.glob("*.npz"))) < 3:
+        time.sleep(0.02)
+    assert proc.poll() is None, proc.stderr.read().decode()
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    proc.stderr.close()
+    kept = len(list(parts.glob("*.npz")))
+    assert 3 <= kept < BATCHES and not out.exists()
+    ds = urmx.run_study(toy, out=out, scheduler="serial", progress=False, batch_size=1)
+    assert len(RUNS) == BATCHES - kept  # the killed run's batches are not run again
+    RUNS.clear()
+    _same(ds, urmx.run_study(toy, scheduler="serial", progress=False, batch_size=1))
+
+
+# ---- a batch runs on numpy alone ---------------------------------------------------------------
+
+HEAVY = ("xarray", "dask", "distributed", "obspy", "pandas")
+BATCH = """\
+import json, pickle, sys
+from urmx.study import kinds
+from urmx.study.clients import record_samples
+
+name, task, acc = pickle.load(open(sys.argv[1], "rb"))
+out = kinds.get(name).run(task, record_samples(acc))
+assert all(isinstance(v, type(acc)) for v in out.values())
+print(json.dumps(sorted({m.split(".")[0] for m in sys.modules} & set(sys.argv[2:]))))
+"""
+
+
+@pytest.mark.parametrize("extra", ["", '[study.ida]\nim = "sa_wall"\nrtol = 0.05\n'])
+def test_a_batch_of_each_kind_imports_numpy_only(make_study, tmp_path, extra):
+    """The batch runner of each built-in kind, run in a fresh process (the record samples
+    through the task the engine submits for them), imports none of xarray, dask,
+    distributed, ObsPy or pandas; the IDA batch computes its spectral intensity and the
+    record's predominant frequency there."""
+    from urmx.records import Record
+
+    t = np.arange(400) * 0.01
+    acc = 3.0 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-0.3 * t)
+    path = make_study('[study]\nwalls = ["s16"]\ndiaphragms = ["D1"]\nrecords = ["x"]\n'
+                      "cor = [0.8]\n" + extra, "batch.toml")
+    study = load_study(path)
+    (batch, task), = urmx.study.batch_tasks(study, {"x": Record("x", acc, 0.01)})
+    assert task.get("predominant", True)
+    job = tmp_path / "job.pickle"
+    job.write_bytes(pickle.dumps((study.kind, task, acc)))
+    done = subprocess.run([sys.executable, "-c", BATCH, str(job), *HEAVY],
+                          capture_output=True, text=True, check=True)
+    assert json.loads(done.stdout.splitlines()[-1]) == []

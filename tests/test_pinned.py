@@ -1,0 +1,65 @@
+"""The study engine's results are those pinned before it was split into kinds (issue 23):
+batch keys byte for byte (part folders written before still resume), the archives of the
+tests' studies and of catalog and IDA studies on the real kernel, and the reports' texts
+(`tests.fixtures.pinned`, which also writes them)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import xarray as xr
+
+import urmx
+from urmx.netcdf import write_netcdf
+
+from .fixtures import pinned as P
+
+
+@pytest.mark.parametrize("name", sorted(P.studies()))
+def test_batch_keys_are_unchanged(name, tmp_path):
+    expected = json.loads(P.KEYS.read_text())[name]
+    assert P.batch_keys_of(name, tmp_path) == expected
+
+
+def test_the_key_check_fails_on_another_key(tmp_path, monkeypatch):
+    """A key that differs in one input is caught (here: the kernel's source hash)."""
+    expected = json.loads(P.KEYS.read_text())["gaps"]
+    monkeypatch.setattr(P, "SOURCE", "another-source")
+    assert P.batch_keys_of("gaps", tmp_path) != expected
+
+
+@pytest.mark.parametrize("name", sorted(P.STAND_IN))
+def test_archives_of_the_tests_studies_are_unchanged(name, tmp_path):
+    ds = P.run_stand_in(name, tmp_path)
+    pinned = urmx.open_study(P.HERE / f"{name}.nc").load()
+    xr.testing.assert_identical(P.comparable(ds), P.comparable(pinned))
+    out = tmp_path / "again.nc"
+    write_netcdf(ds, out)
+    xr.testing.assert_identical(P.comparable(urmx.open_study(out).load()),
+                                P.comparable(pinned))
+
+
+@pytest.mark.parametrize("name", P.REAL_RUNS)
+def test_archives_on_the_real_kernel_are_unchanged(name, records_dir, tmp_path):
+    inputs = json.loads(P.REAL.read_text())[name]
+    now = P.real_inputs(name, tmp_path)
+    if now != inputs:
+        pytest.skip(f"{name}: the kernel's sources or the records' samples differ from those "
+                    "the pinned archive was computed with; pin again with "
+                    "`python -m tests.fixtures.pinned`")
+    ds = P.run_real(name, tmp_path)
+    pinned = urmx.open_study(P.HERE / f"{name}.nc").load()
+    xr.testing.assert_identical(P.comparable(ds), P.comparable(pinned))
+
+
+def test_paper_findings_are_unchanged():
+    expected = json.loads((P.HERE / "findings.json").read_text())
+    assert json.loads(json.dumps(P.paper_findings())) == expected
+
+
+def test_reports_are_unchanged(tmp_path):
+    assert P.paper_report(tmp_path / "paper") == (P.HERE / "paper-report.md").read_text()
+    assert P.fragility_report(tmp_path / "fragility") == \
+        (P.HERE / "fragility-report.md").read_text()
+    assert P.calibration(tmp_path / "calibration") == (P.HERE / "calibration.md").read_text()

@@ -1,0 +1,148 @@
+"""The one record type that studies, the collapse-capacity search and the benchmarks hand to
+the kernel (samples, time step, scale factor, digest; numpy only), and the one adapter that
+makes it from a Trace, a manifest id, a record file or an ``(array, dt)`` pair.
+
+One meaning of a manifest id everywhere: the record file's samples, **unscaled**, with the
+manifest's scale factor kept beside them (:attr:`Record.scale_factor`). Studies and the
+collapse-capacity search analyse the record as the manifest scales it,
+``acceleration * scale_factor`` (:meth:`Record.scaled`); `urmx.simulate` and
+`urmx.records.load` give the samples as they are.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, MissingFileError
+
+
+@dataclass
+class Record:
+    """A ground-motion record as a worker holds it.
+
+    Parameters
+    ----------
+    id : str
+        Manifest id, trace id or ``"array"``.
+    acceleration : ndarray
+        Samples, unscaled (float64, contiguous). [m s-2]
+    dt : float
+        Time step. [s]
+    scale_factor : float
+        The record's own scale factor (the manifest's, or a study's override): the record
+        is analysed as ``acceleration * scale_factor``. [1]
+    digest : str
+        First 16 hex digits of the SHA-256 of the samples' bytes (computed when not given);
+        batch keys hold it, so a part computed on other samples is never reused.
+    """
+
+    id: str
+    acceleration: np.ndarray
+    dt: float
+    scale_factor: float = 1.0
+    digest: str = ""
+
+    def __post_init__(self) -> None:
+        self.acceleration = np.ascontiguousarray(self.acceleration, dtype=np.float64)
+        if not self.digest:
+            self.digest = hashlib.sha256(self.acceleration.tobytes()).hexdigest()[:16]
+
+    @property
+    def pga(self) -> float:
+        """Peak of the unscaled samples. [m s-2]"""
+        return float(np.max(np.abs(self.acceleration)))
+
+    def scaled(self) -> np.ndarray:
+        """The samples as analysed: ``acceleration * scale_factor``. [m s-2]"""
+        return np.ascontiguousarray(self.acceleration * self.scale_factor, dtype=np.float64)
+
+    @classmethod
+    def from_trace(cls, trace, id: str | None = None, scale_factor: float = 1.0) -> Record:
+        """A Record of an ObsPy Trace's samples (as given) and time step."""
+        return cls(str(trace.id) if id is None else id, trace.data, float(trace.stats.delta),
+                   float(scale_factor))
+
+
+def load_named(name: str | os.PathLike, records_dir: str | os.PathLike | None = None):
+    """A record named by a string, as an ObsPy Trace in m s-2 (unscaled): a record file
+    (one channel), else a manifest record id.
+
+    Raises
+    ------
+    urmx.errors.MissingFileError
+        `name` is neither an existing file nor a manifest id.
+    urmx.errors.InputError
+        The file holds more than one channel.
+    """
+    from . import manifest, read
+
+    path = Path(name)
+    if path.is_file():
+        stream = read(path)
+        if len(stream) != 1:
+            ids = ", ".join(tr.id for tr in stream)
+            raise InputError(f"record file {str(name)!r} holds {len(stream)} channels "
+                             f"({ids}); give a file with one channel")
+        return stream[0]
+    from . import load
+
+    try:
+        known = manifest(records_dir)
+    except MissingFileError:
+        known = {}
+    if str(name) not in known:
+        raise MissingFileError(f"record {str(name)!r} is neither a file nor a manifest "
+                               "record id (see `urmx records list`)")
+    return load(str(name), records_dir)
+
+
+def _pair(acc: Any, dt: Any) -> Record:
+    try:
+        dt = float(dt)
+    except (TypeError, ValueError):
+        raise InputError(f"record: dt={dt!r} must be a number of seconds") from None
+    acc = np.ascontiguousarray(acc, dtype=np.float64)
+    if acc.ndim != 1 or acc.size < 2:
+        raise InputError(f"record: the samples must be a 1-D array of at least 2 values "
+                         f"(got shape {acc.shape})")
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"record: dt={dt!r} must be a positive time step in seconds")
+    return Record("array", acc, dt)
+
+
+def as_record(record: Any, records_dir: str | os.PathLike | None = None) -> Record:
+    """The `Record` of any record argument.
+
+    Parameters
+    ----------
+    record : Record, obspy.Trace, str, path or (array, dt)
+        A Record (as it is); a Trace (its samples as given, scale factor 1); a record file
+        or a manifest id (unscaled samples, the manifest's scale factor beside them; module
+        docstring); samples [m s-2] and their time step [s].
+    records_dir : str or path, optional
+        Records folder for a manifest id.
+
+    Raises
+    ------
+    urmx.errors.InputError
+        A bad pair or an argument of another type.
+    """
+    if isinstance(record, Record):
+        return record
+    if isinstance(record, (str, os.PathLike)):
+        trace = load_named(record, records_dir)
+        entry = trace.stats.get("record") or {}
+        return Record.from_trace(trace, str(record), float(entry.get("scale_factor") or 1.0))
+    if hasattr(record, "stats") and hasattr(record, "data"):
+        return Record.from_trace(record)
+    if isinstance(record, (tuple, list)) and len(record) == 2:
+        return _pair(*record)
+    raise InputError(f"record must be an obspy Trace, a manifest id or an (array, dt) pair, "
+                     f"not {type(record).__name__}")

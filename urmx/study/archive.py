@@ -1,0 +1,36 @@
+"""Reopening a study archive lazily, with the archives of older urmx masked by their kind."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import xarray as xr
+
+from .. import variables
+from ..errors import MissingFileError
+from . import kinds
+
+
+def open_study(path: str | os.PathLike, chunks: Any = None) -> xr.Dataset:
+    """Reopen a study archive lazily (dask arrays; ``chunks`` as for `xarray.open_dataset`,
+    default one chunk per variable).
+
+    Outputs of cells with no valid result read as NaN: the integer and flag outputs carry
+    a CF ``_FillValue`` that xarray masks. Archives written before urmx stored them so are
+    masked here by the kind they belong to (each kind's ``reopen``; a grid's by
+    ``status``, for example).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise MissingFileError(f"no study archive {str(path)!r}")
+    ds = xr.open_dataset(path, engine="netcdf4", chunks={} if chunks is None else chunks)
+    if not any(n in ds.data_vars and ds[n].dtype.kind in "iub"
+               for n in variables.INTEGER_OUTPUTS):
+        return ds
+    for kind in kinds.registered():
+        masked = kind.reopen(ds) if kind.reopen is not None else None
+        if masked is not None:
+            return masked
+    return ds

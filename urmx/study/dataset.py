@@ -1,0 +1,156 @@
+"""What every study kind's Dataset shares: the one status vocabulary, the coordinates of the
+wall, diaphragm, record and cor dimensions with the items' properties, the global
+attributes, and placing each batch's block of results into the study's arrays.
+
+xarray is imported only by the functions that build its objects, so a worker that runs a
+batch (numpy only) can use the vocabulary without it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import variables
+from ..kernel import STATUS as _KERNEL_STATUS
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+#: an analysis' status, as the kernel reports it, and a cell no analysis ran for; the flag
+#: values 0, 1, 2, 3 of a grid's ``status`` variable
+STATUS = (*_KERNEL_STATUS, "not-run")
+NOT_RUN = STATUS.index("not-run")
+VALID = (STATUS.index("ok"), STATUS.index("collapsed"))  # statuses whose outputs are kept
+MISSING = ("NaN where the cell was not run or its status is not ok/collapsed (event-limit: "
+           "the run stopped early, its peaks are not the record's)")
+
+
+def status_attrs() -> dict[str, Any]:
+    """Attributes of a ``status`` variable: the registry's, the CF flags and a comment."""
+    attrs = variables.attrs("status")
+    attrs["flag_values"] = np.arange(len(STATUS), dtype=np.int8)
+    attrs["flag_meanings"] = " ".join(s.replace("-", "_") for s in STATUS)
+    attrs["comment"] = ("not_run: the study's pairs leave the cell out or its batch is "
+                        "missing; every output of a cell that is not ok or collapsed is "
+                        "missing (NaN)")
+    return attrs
+
+
+def status_names(status: xr.DataArray) -> xr.DataArray:
+    """The status codes of a study as strings (``ok``, ``collapsed``, ...)."""
+    import xarray as xr
+
+    return xr.apply_ufunc(lambda a: np.asarray(STATUS, dtype=object)[a], status,
+                          dask="allowed")
+
+
+def coord(name: str, dims: Any, values: Any) -> xr.Variable:
+    """A coordinate with the registry's attributes."""
+    import xarray as xr
+
+    return xr.Variable(dims, values, attrs=variables.attrs(name))
+
+
+def cell_array(shape: tuple[int, ...], batches: list, results: dict, name: str,
+               block: Any = None, fill: float = np.nan, dtype: Any = np.float64
+               ) -> np.ndarray:
+    """An array of `shape` over a kind's cell dimensions (then any per-cell axes), `fill`
+    where no batch wrote, each batch's result `name` placed at its block.
+
+    Parameters
+    ----------
+    block : callable, optional
+        ``block(values, batch) -> array`` of the batch's block shape (then any per-cell
+        axes): how a kind's result array maps onto the block (default: as it is). Per-cell
+        axes shorter than the study's are padded with `fill`.
+    """
+    out = np.full(shape, fill, dtype=dtype)
+    for batch in batches:
+        values = np.asarray(results[batch.key][name])
+        values = block(values, batch) if block is not None else values
+        trailing = tuple(slice(0, n) for n in values.shape[len(batch.block):])
+        out[batch.index(*trailing)] = values
+    return out
+
+
+def global_attrs(study: Any, started: str, command: str | None) -> dict[str, str]:
+    """Global attributes of a study archive (title, CF convention, ``history`` with the
+    time `started` and the `command`, the urmx version, the study file's text); shared by
+    every study kind."""
+    from .. import __version__
+
+    cmd = command or f"urmx.run_study({study.name!r})"
+    return {
+        "title": study.title or study.name,
+        "Conventions": "CF-1.8",
+        "history": f"{started} urmx {__version__}: {cmd}",
+        "urmx_version": __version__,
+        "study_name": study.name,
+        "study": study.text,
+        "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
+    }
+
+
+def _wall_coords(study: Any) -> dict[str, xr.Variable]:
+    walls = [w.wall for w in study.walls]
+    return {
+        "wall": coord("wall", "wall", np.array(study.dims["wall"], dtype=object)),
+        "slenderness": coord("slenderness", "wall", np.array([w.slenderness for w in walls])),
+        "height": coord("height", "wall", np.array([w.height for w in walls])),
+        "thickness": coord("thickness", "wall", np.array([w.thickness for w in walls])),
+        "mass": coord("mass", "wall", np.array([w.mass for w in walls])),
+        "crack_ratio": coord("crack_ratio", "wall", np.array([w.crack_ratio for w in walls])),
+        "pmr": coord("pmr", "wall", np.array([w.pmr for w in walls])),
+    }
+
+
+def _diaphragm_coords(study: Any) -> dict[str, xr.Variable]:
+    specimen = study.specimen
+    cells = [[study.wall(s, d) for d in study.diaphragms] for s in study.walls]
+    cell_freq = np.array([[w.diaphragm_frequency("top") for w in row] for row in cells])
+    median = len(study.walls) // 2
+    md = study.catalog.building.diaphragm_mass
+    nan_if = (lambda value: math.nan if specimen else value)  # noqa: E731
+    coords = {
+        "diaphragm": coord("diaphragm", "diaphragm",
+                           np.array(study.dims["diaphragm"], dtype=object)),
+        "stiffness": coord("stiffness", "diaphragm", np.array(
+            [nan_if(d.stiffness_value) for d in study.diaphragms])),
+        "frequency": coord("frequency", "diaphragm", np.array(
+            [nan_if(cell_freq[median, i]) for i in range(len(study.diaphragms))])),
+        "cell_frequency": coord("cell_frequency", ("wall", "diaphragm"), cell_freq),
+        "diaphragm_mass": coord("diaphragm_mass", "diaphragm", np.array(
+            [nan_if(md) for _ in study.diaphragms])),
+        "diaphragm_damping": coord("diaphragm_damping", "diaphragm", np.array(
+            [d.damping for d in study.diaphragms])),
+    }
+    if study.own_supports:
+        coords["supports"] = coord("supports", "diaphragm", np.array(
+            [study.supports_of(d) for d in study.diaphragms], dtype=object))
+    return coords
+
+
+def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
+    recs = [records[r] for r in study.records]
+    return {
+        "record": coord("record", "record", np.array(study.dims["record"], dtype=object)),
+        "pga": coord("pga", "record", np.array([r.pga for r in recs])),
+        "scale_factor": coord("scale_factor", "record",
+                              np.array([r.scale_factor for r in recs])),
+        "scaled_pga": coord("scaled_pga", "record",
+                            np.array([r.pga * r.scale_factor for r in recs])),
+        "record_dt": coord("record_dt", "record", np.array([r.dt for r in recs])),
+    }
+
+
+def grid_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
+    """Coordinates of the wall, diaphragm, record and cor dimensions, with the items'
+    properties (shared by every study kind)."""
+    coords = {**_wall_coords(study), **_diaphragm_coords(study), **_record_coords(study, records),
+              "cor": coord("cor", "cor", np.array(study.dims["cor"], dtype=np.float64))}
+    if "supports" in coords:  # after cor, where it always stood
+        coords["supports"] = coords.pop("supports")
+    return coords

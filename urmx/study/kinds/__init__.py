@@ -1,0 +1,119 @@
+"""Study kinds: what a study computes, as plug-ins of the kind-blind engine; this module is
+the one place kinds are registered (:data:`BUILT_IN` and :func:`register`).
+
+The kind protocol
+-----------------
+A kind is a `Kind` (`urmx.study.kinds.kind`): a frozen record of a few names and
+functions. The engine (`urmx.study.engine`) runs any registered kind the same way and never
+asks which one it is: it parses nothing, cuts nothing and assembles nothing itself.
+
+``name`` : str
+    Registry name (``"grid"``, ``"ida"``), stored as ``Study.kind``.
+``table`` : str or None
+    The ``[study.<table>]`` table that makes a study this kind (None: the default kind, a
+    study without any kind table). The catalog keeps every registered kind's table as data
+    (``Study.tables``) and refuses any other ``[study.<name>]`` with file, key and line.
+``combines`` : tuple of str
+    Other kinds' tables this kind reads as well (a study with several kind tables is the
+    kind that combines all the others; :func:`select`).
+``unit`` : str
+    What progress counts: one cell of the kind (``"analyses"``, ``"cells"``).
+``outputs`` : tuple of str
+    The arrays every batch result holds; a saved part lacking one is computed again.
+``parse(study) -> settings``
+    Validates the kind's table(s) and the study's grid for this kind (raising
+    ``study.error(key, message, *needles)``, a `urmx.catalog.CatalogError` naming file,
+    key and line) and returns its settings, stored as ``Study.settings``. Called by
+    `urmx.catalog.load_study`, so a bad table fails before any work.
+``dims(study) -> dict``
+    The kind's cell dimensions and their values, in archive order (default
+    ``study.dims``: wall, diaphragm, record, cor and the study's added dimensions). A
+    cell is one point of this grid; a batch covers a block of it (`urmx.study.batches`).
+``tasks(study, records, batch_size, kernel) -> [(Batch, task)]``
+    Cuts the cells into batches (`urmx.study.batches.by_walls` for both kinds here) and
+    gives each its task (plain values, picklable, no xarray) and its key
+    (`urmx.study.parts.task_key`, the one key function). A batch holds one record.
+``run(task, acceleration) -> dict of ndarray``
+    Runs one batch on a worker: numpy only (it must import neither xarray nor dask nor
+    ObsPy: a test runs each kind's batch in a fresh process and looks). `acceleration`
+    is the record's samples, unscaled; the task carries its scale factor.
+``assemble(study, records, tasks, results, attrs) -> xarray.Dataset``
+    Builds the Dataset from every batch's result (`urmx.study.dataset` places each block
+    and gives the shared coordinates); `attrs` are the engine's global attributes.
+``reopen(ds) -> Dataset or None``
+    For `urmx.open_study`: masks an archive of an older urmx of this kind (None when the
+    archive is not this kind's or needs nothing); optional.
+
+A new kind is one module holding its `Kind`, added to :data:`BUILT_IN` here, or registered
+from outside with ``urmx.study.kinds.register(kind)`` (a test's toy kind does so).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .kind import Kind
+
+_KINDS: dict[str, Kind] = {}
+
+
+def register(kind: Kind) -> Kind:
+    """Add a kind to the registry (replacing one of the same name); returns it."""
+    if not isinstance(kind, Kind):
+        raise TypeError(f"a study kind must be a urmx.study.kinds.Kind, not "
+                        f"{type(kind).__name__}")
+    _KINDS[kind.name] = kind
+    return kind
+
+
+def get(name: str) -> Kind:
+    """The registered kind `name`."""
+    try:
+        return _KINDS[name]
+    except KeyError:
+        raise KeyError(f"no study kind {name!r} (registered: {', '.join(_KINDS)})") from None
+
+
+def registered() -> tuple[Kind, ...]:
+    """Every registered kind, the built-in ones first."""
+    return tuple(_KINDS.values())
+
+
+def tables() -> tuple[str, ...]:
+    """The ``[study.<name>]`` tables of the registered kinds."""
+    return tuple(k.table for k in _KINDS.values() if k.table)
+
+
+def select(study: Any) -> Kind:
+    """The kind of a study: the default kind (no table) when the study has no kind table,
+    else the one kind whose table it has and that combines every other table it has.
+
+    Raises
+    ------
+    urmx.catalog.CatalogError
+        Tables no one kind combines (via ``study.error``).
+    """
+    present = set(study.tables)
+    if not present:
+        return next(k for k in _KINDS.values() if k.table is None)
+    found = [k for k in _KINDS.values()
+             if k.table in present and present <= {k.table, *k.combines}]
+    if len(found) != 1:
+        names = sorted(present)
+        raise study.error(f"study.{names[-1]}", f"the tables {', '.join(names)} make no one "
+                          "study kind (each kind reads its own table)", names[-1])
+    return found[0]
+
+
+def prepare(study: Any) -> tuple[str, Any]:
+    """(kind name, parsed settings) of a study (`select`, then the kind's ``parse``)."""
+    kind = select(study)
+    return kind.name, kind.parse(study) if kind.parse is not None else None
+
+
+from . import grid, ida  # noqa: E402 - the built-in kinds, registered below
+
+#: the kinds urmx comes with; the first needs no table (a study without one is this kind)
+BUILT_IN = (grid.KIND, ida.KIND)
+for _kind in BUILT_IN:
+    register(_kind)

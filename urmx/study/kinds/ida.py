@@ -1,0 +1,301 @@
+"""The IDA study kind (a ``[study.ida]`` table): one collapse capacity per (wall, diaphragm,
+record, cor) cell by incremental dynamic analysis (`urmx.fragility`), the IDA curves, and
+the lognormal fragility fit of each (wall, diaphragm, cor) over the records.
+
+The table holds ``im`` (the intensity measure), ``rtol``, ``step`` and ``max_intensity``
+(`IdaSettings`; defaults those of `urmx.fragility.collapse_capacity`). A batch is a group
+of walls of one diaphragm and record over every cor (:func:`run_batch`, numpy only). A
+cell the study's pairs leave out is missing in every output: NaN, with ``censored``,
+``analyses`` and ``event_limits`` float64 in the Dataset and int32 with the ``_FillValue``
+on disk.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ... import fragility, variables
+from ...netcdf import INT_FILL
+from ...records.measures import dominant_frequency
+from ..batches import Batch, by_walls
+from ..parts import task_key
+from .kind import Kind
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+#: the arrays every batch of :func:`run_batch` returns (a saved part lacking one is
+#: computed again)
+OUTPUTS = ("capacity", "censored", "analyses", "event_limits", "intensity", "ratio", "unit",
+           "predominant")
+#: the outputs of an IDA archive with one value per (wall, diaphragm, record, cor) cell
+CELL_OUTPUTS = ("collapse_intensity", "censored", "analyses", "event_limits",
+                "instability_ratio")
+MISSING = "NaN where the study's pairs leave the cell out (not run)"
+DIMS = ("wall", "diaphragm", "record", "cor")  # the cells: no added dimension
+
+
+@dataclass(frozen=True)
+class IdaSettings:
+    """The ``[study.ida]`` table: one collapse capacity per cell (`urmx.fragility`).
+
+    Parameters
+    ----------
+    im : str
+        Intensity measure (`urmx.fragility.IMS`).
+    rtol : float
+        Relative width of the final bracket. [1]
+    step : float
+        Ratio of the hunt's geometric grid of scale factors. [1]
+    max_intensity : float
+        Highest intensity analysed (censoring). [units of the measure]
+    """
+
+    im: str = fragility.DEFAULT_IM
+    rtol: float = fragility.RTOL
+    step: float = fragility.STEP
+    max_intensity: float = math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def parse(study: Any) -> IdaSettings:
+    """Validate ``[study.ida]`` and the grid it runs on (errors name file, key and line)."""
+    table = study.tables["ida"]
+    if not isinstance(table, dict):
+        raise study.error("study.ida", "must be a table (im, rtol, step, max_intensity)",
+                          "ida")
+    known = ("im", "rtol", "step", "max_intensity")
+    for k in table:
+        if k not in known:
+            raise study.error(f"study.ida.{k}", f"unknown key (known: {', '.join(known)})",
+                              "ida", k)
+    im = table.get("im", IdaSettings.im)
+    if im not in fragility.IMS:
+        raise study.error("study.ida.im", f"{im!r} is not an intensity measure (known: "
+                          f"{', '.join(fragility.IMS)})", "ida", "im")
+    values = {}
+    for k, default, low in (("rtol", IdaSettings.rtol, 0.0), ("step", IdaSettings.step, 1.0),
+                            ("max_intensity", fragility.MAX_INTENSITY[im], 0.0)):
+        v = table.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or v <= low:
+            raise study.error(f"study.ida.{k}", f"{v!r} must be a number above {low:g}", "ida",
+                              k)
+        values[k] = float(v)
+    if values["rtol"] >= 1.0:
+        raise study.error("study.ida.rtol", f"{values['rtol']!r} must be below 1", "ida",
+                          "rtol")
+    for k in ("scale", "impact", "damping"):
+        if k in study.extra:
+            raise study.error(f"study.{k}", "an IDA study scales each record itself and runs "
+                              f"one capacity per (wall, diaphragm, record, cor): {k} cannot be "
+                              "a dimension here", k)
+    if study.histories:
+        raise study.error("study.history", "an IDA study keeps no time histories", "history")
+    return IdaSettings(im=im, **values)
+
+
+def dims(study: Any) -> dict[str, list]:
+    """The cells: wall, diaphragm, record, cor."""
+    return {k: study.dims[k] for k in DIMS}
+
+
+def tasks(study: Any, records: dict, batch_size: int = 16,
+          kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
+    """Batches of up to `batch_size` cells (walls x cor) of one diaphragm and one record,
+    each with the key of everything that decides its result (the settings, walls, record
+    samples, urmx version and `urmx.jitcache.SOURCE_HASH`)."""
+    settings = study.settings.to_dict()
+    out = []
+    first = {}  # the first batch of each record computes its predominant frequency
+    for batch in by_walls(study, dims(study), batch_size):
+        rec = records[study.records[batch.record]]
+        d = study.diaphragms[batch.diaphragm]
+        task = dict(walls=[study.wall(study.walls[iw], d) for iw in batch.walls],
+                    dt=rec.dt, scale_factor=rec.scale_factor, cor=list(study.cor),
+                    impact=study.impact, ida=settings, kernel=kernel,
+                    predominant=first.setdefault(batch.record, batch) is batch)
+        batch.key = task_key(task, rec, prefix="ida-", kind="ida",
+                             walls=[w.to_dict() for w in task["walls"]])
+        out.append((batch, task))
+    return out
+
+
+def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
+    """One batch: the collapse capacity of every (wall, cor) cell, as numpy arrays
+    (capacity, censored, analyses, event_limits of shape (walls, cor); the IDA points
+    ``intensity`` and ``ratio`` of shape (walls, cor, points), NaN-padded; the record's
+    intensity ``unit`` per wall; the record's ``predominant`` frequency when the task asks
+    for it, else NaN). Numpy only."""
+    kernel = task["kernel"]
+    if kernel is None:
+        from ...kernel import run as kernel
+    acc = np.ascontiguousarray(acceleration * task["scale_factor"], dtype=np.float64)
+    ida, walls, dt = task["ida"], task["walls"], task["dt"]
+    unit = fragility.record_intensities(acc, dt, ida["im"], walls)
+    shape = (len(walls), len(task["cor"]))
+    results = {}
+    for iw, ic in np.ndindex(*shape):
+        results[iw, ic] = fragility.cell_capacity(
+            kernel, walls[iw], acc, dt, float(unit[iw]), ida["im"], task["cor"][ic],
+            task["impact"], ida["rtol"], ida["step"], ida["max_intensity"])
+    k = max(r.analyses for r in results.values())
+    out = {"capacity": np.full(shape, np.nan), "censored": np.zeros(shape, bool),
+           "analyses": np.zeros(shape, np.int32), "event_limits": np.zeros(shape, np.int32),
+           "intensity": np.full((*shape, k), np.nan), "ratio": np.full((*shape, k), np.nan),
+           "unit": unit, "predominant": np.array(
+               dominant_frequency(acc, dt) if task["predominant"] else np.nan)}
+    for (iw, ic), r in results.items():
+        out["capacity"][iw, ic] = r.capacity
+        out["censored"][iw, ic] = r.censored
+        out["analyses"][iw, ic] = r.analyses
+        out["event_limits"][iw, ic] = r.event_limits
+        out["intensity"][iw, ic, :r.analyses] = r.intensity
+        out["ratio"][iw, ic, :r.analyses] = r.instability_ratio
+    return out
+
+
+# ---- the Dataset ----------------------------------------------------------------------------
+
+def _on_block(values: np.ndarray, batch: Batch) -> np.ndarray:
+    """A batch's (walls, cor, ...) array on its (wall, diaphragm, record, cor) block."""
+    return values.reshape(values.shape[0], 1, 1, *values.shape[1:])
+
+
+def _cells(study: Any, tasks: list, results: dict) -> dict[str, np.ndarray]:
+    """Every per-cell output over (wall, diaphragm, record, cor [, intensity_step]):
+    float64, NaN where the cell was not run (the flag and counts too, so that sums and
+    means skip those cells; int32 with a _FillValue on disk)."""
+    from ..dataset import cell_array
+
+    batches = [b for b, _ in tasks]
+    shape = tuple(len(v) for v in dims(study).values())
+    k = max([results[b.key]["intensity"].shape[-1] for b in batches] or [1])
+    out = {name: cell_array(shape, batches, results, source, _on_block)
+           for name, source in (("collapse_intensity", "capacity"), ("censored", "censored"),
+                                ("analyses", "analyses"), ("event_limits", "event_limits"))}
+    for name, source in (("intensity", "intensity"), ("instability_ratio", "ratio")):
+        out[name] = cell_array((*shape, k), batches, results, source, _on_block)
+    unit = np.full(shape[:3], np.nan)  # of the record per (wall, diaphragm, record)
+    predominant = np.full(shape[2], np.nan)
+    for b in batches:
+        r = results[b.key]
+        unit[np.ix_(b.walls, [b.diaphragm], [b.record])] = r["unit"].reshape(-1, 1, 1)
+        if np.isfinite(r["predominant"]):
+            predominant[b.record] = r["predominant"]
+    out["record_intensity"] = unit
+    out["predominant_frequency"] = predominant
+    return out
+
+
+def _fits(cap: np.ndarray, cen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Median and dispersion of the lognormal fit over the records of each (wall,
+    diaphragm, cor); NaN where no fit exists."""
+    median = np.full((cap.shape[0], cap.shape[1], cap.shape[3]), np.nan)
+    disp = np.full_like(median, np.nan)
+    for iw, idp, ic in np.ndindex(median.shape):
+        ran = np.isfinite(cap[iw, idp, :, ic])
+        try:
+            f = fragility.fit_lognormal(cap[iw, idp, ran, ic], cen[iw, idp, ran, ic] == 1)
+        except ValueError:
+            continue
+        median[iw, idp, ic], disp[iw, idp, ic] = f.median, f.dispersion
+    return median, disp
+
+
+def _data_vars(cells: dict, median, disp, attrs: Callable) -> dict[str, xr.Variable]:
+    import xarray as xr
+
+    curve = (*DIMS, "intensity_step")
+    fit_dims = ("wall", "diaphragm", "cor")
+    stored = f"{MISSING}; stored as int32 with _FillValue {INT_FILL}, read as float64"
+    return {
+        "collapse_intensity": xr.Variable(DIMS, cells["collapse_intensity"], attrs=attrs(
+            "collapse_intensity", comment=MISSING)),
+        "censored": xr.Variable(DIMS, cells["censored"], attrs=attrs(
+            "censored", comment=f"1 censored, 0 not; {stored}")),
+        "instability_ratio": xr.Variable(curve, cells["instability_ratio"], attrs=attrs(
+            "instability_ratio", comment="IDA curve: one value per analysis of the cell, "
+            "ascending intensity; NaN after the cell's last analysis and where the cell "
+            "was not run")),
+        "median_collapse_intensity": xr.Variable(fit_dims, median,
+                                                 attrs=attrs("median_collapse_intensity")),
+        "dispersion": xr.Variable(fit_dims, disp, attrs=attrs("dispersion")),
+        "analyses": xr.Variable(DIMS, cells["analyses"], attrs=attrs("analyses",
+                                                                     comment=stored)),
+        "event_limits": xr.Variable(DIMS, cells["event_limits"], attrs=attrs(
+            "event_limits", comment=stored)),
+        "record_intensity": xr.Variable(DIMS[:3], cells["record_intensity"],
+                                        attrs=attrs("record_intensity")),
+    }
+
+
+def _coords(study: Any, records: dict, cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
+    import xarray as xr
+
+    from ..dataset import grid_coords
+
+    k = cells["intensity"].shape[-1]
+    periods = np.array([[fragility.rocking_period(study.wall(w, d)) for d in study.diaphragms]
+                        for w in study.walls])
+    coords = grid_coords(study, records)
+    coords["intensity_step"] = xr.Variable("intensity_step", np.arange(k),
+                                           attrs=attrs("intensity_step"))
+    coords["intensity"] = xr.Variable((*DIMS, "intensity_step"), cells["intensity"],
+                                      attrs=attrs("intensity"))
+    coords["rocking_period"] = xr.Variable(("wall", "diaphragm"), periods,
+                                           attrs=attrs("rocking_period"))
+    coords["predominant_frequency"] = xr.Variable(
+        "record", cells["predominant_frequency"], attrs=attrs(
+            "predominant_frequency", comment="of each record, Konno-Ohmachi smoothed "
+            "(urmx.records.predominant_frequency)"))
+    return coords
+
+
+def assemble(study: Any, records: dict, tasks: list, results: dict,
+             attrs: dict[str, Any]) -> xr.Dataset:
+    """The Dataset of an IDA study: capacities, censoring, IDA curves and the lognormal
+    fits per (wall, diaphragm, cor), with the grid's coordinates."""
+    import xarray as xr
+
+    settings = study.settings
+    ctx = variables.intensity_context(settings.im)
+
+    def var_attrs(name, **extra):
+        return {**variables.attrs(name, None, **ctx), **extra}
+
+    cells = _cells(study, tasks, results)
+    median, disp = _fits(cells["collapse_intensity"], cells["censored"])
+    gattrs = dict(attrs)
+    gattrs.update({"intensity_measure": settings.im, "ida_rtol": settings.rtol,
+                   "ida_step": settings.step, "ida_max_intensity": settings.max_intensity,
+                   "ida_convention": "first collapse: the lowest collapse the hunt and "
+                                     "bisection saw; censored cells hold max_intensity"})
+    return xr.Dataset(_data_vars(cells, median, disp, var_attrs),
+                      coords=_coords(study, records, cells, var_attrs), attrs=gattrs)
+
+
+def reopen(ds: xr.Dataset) -> xr.Dataset | None:
+    """An IDA archive written before urmx stored missing cells with a ``_FillValue`` (-1
+    counts, ``censored`` False where a cell was not run), masked by ``analyses``; None when
+    `ds` is not an IDA archive of that kind."""
+    if "collapse_intensity" not in ds.data_vars or "analyses" not in ds.data_vars \
+            or ds["analyses"].dtype.kind not in "iub":
+        return None
+    valid = ds["analyses"] >= 0
+    for name in CELL_OUTPUTS:
+        if name in ds.data_vars:
+            ds[name] = ds[name].where(valid).assign_attrs(dict(ds[name].attrs, comment=MISSING))
+    return ds
+
+
+KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
+            tasks=tasks, run=run_batch, assemble=assemble, reopen=reopen)

@@ -799,7 +799,7 @@ def render(data: dict) -> list[str]:
     conv, sub, cases = data["convergence"], data["converged_sub"], data["cases"]
     own = [c for c in cases if c["supports"] == "own"]
     rigid = [c for c in cases if c["supports"] == "rigid"]
-    L = ["## Side by side with OpenSees", "",
+    L = ["", "## Side by side with OpenSees", "",  # (the section before may end on text)
          f"openseespy {data['openseespy']} (OpenSees {data['opensees']}), the `peers` extra "
          "(`pip install -e \".[peers]\"`); `python -m benchmarks opensees` measures this "
          f"section ({data['seconds'] / 60:.1f} min here). The models and why they are built "

@@ -31,7 +31,7 @@ openseespy is the optional ``peers`` extra (``pip install -e ".[peers]"``); with
 section is skipped with one line. The wheel ships its own BLAS without finding it:
 :func:`opensees` preloads it.
 
-Three traps met on the way (each gave plausible numbers, not an error): under the
+Three traps met on the way (the first two give plausible numbers and no error): under the
 ``Transformation`` constraint handler a ``fix`` on the retained node of a multi-point
 constraint mis-maps the dynamics (static answers right, transient peaks 7 % off at a fine
 step, worse elsewhere), so model A uses the ``Lagrange`` handler; a chain of constraints
@@ -63,7 +63,6 @@ from urmx.markdown import table
 from ..common import SectionSkipped, fmt
 
 IN_ALL = False
-OPENSEESPY = "3.7.1.2"  # the version the peers extra pins (the newest for Python 3.11)
 CALIBRATION = Path(__file__).resolve().parents[1] / "opensees_calibration.toml"
 COR = 0.8  # coefficient of restitution of the comparison and the calibration [1]
 WALLS = ("benchmark", "s12-D1")
@@ -77,7 +76,9 @@ CLEAR = (0.8, 0.9, 1.1, 1.25)  # a scale is clear of the threshold when these x 
 SURVIVE = (0.3, 0.45, 0.6, 0.2)  # survivor scales tried, x urmx's first collapse scale
 COLLAPSE = (1.5, 2.0, 2.5, 3.0)  # collapse scales tried, x the same
 KPIN = 1e4  # model A's crack pin: x the lower spring's initial stiffness over a1^2
-SEGMENT_STIFFNESS = 100.0  # model B's beams: EI/L x the stiffest joint spring (issue trap)
+SEGMENT_STIFFNESS = 100.0  # model B's beams: EI/L x the stiffest joint spring (their
+# flexibility softens the joints' initial branch by under 1 %; much stiffer segments are
+# reported to make Newton fail on round-off)
 CHECK_SCALE = 0.1  # model A against urmx at COR 1: a scale well below collapse
 GRAVITY_STEPS = 10
 # free rocking for the calibration: one sine cycle of ground acceleration, then a tail
@@ -519,6 +520,8 @@ def load_calibration(path: Path = CALIBRATION) -> dict:
 
 def write_calibration(fits: dict, path: Path = CALIBRATION) -> None:
     """Store the fitted dashpots with how they were fitted."""
+    from importlib.metadata import version
+
     from urmx import __version__
 
     lines = [
@@ -529,7 +532,7 @@ def write_calibration(fits: dict, path: Path = CALIBRATION) -> None:
         f"a {PULSE_TAIL:g} s tail,",
         f"# step {PULSE_DT:g} s) decays as urmx's at COR {COR:g}: the RMS difference of",
         "# the decay maps log p(k+1) against log p(k) is `misfit`. Each run re-checks it.",
-        f"# Fitted with openseespy {OPENSEESPY} and urmx {__version__}; refit with",
+        f"# Fitted with openseespy {version('openseespy')} and urmx {__version__}; refit with",
         '# `python -c "from benchmarks.sections import opensees; opensees.calibrate_all()"`',
         "# (only when a model changes).",
         f"cor = {COR!r}",

@@ -31,6 +31,12 @@ from urmx.guard import (  # noqa: F401 - re-exported for the sections
     rel_error,
 )
 
+
+class SectionSkipped(Exception):
+    """Raised by a section's ``run`` that cannot measure here (an optional package is
+    missing): the runner says so in one line and keeps the section's last measurement."""
+
+
 # the converged reference: the tightest of these that runs and agrees with the next one
 CONVERGED_RTOLS = (1e-12, 1e-11, 1e-10)
 SELF_CONVERGED = 1e-8  # peaks of two successive tolerances this close: converged

@@ -16,7 +16,7 @@ import numpy as np
 from urmx.markdown import table
 
 from . import sections as registry
-from .common import machine_info
+from .common import SectionSkipped, machine_info
 
 HEADER = ("Regenerate with `urmx bench all --paper` (about 25 minutes on a 2-core "
           "machine, most of it the reference solver in the work-precision study; "
@@ -148,7 +148,8 @@ def run_sections(names: list[str], out: str | os.PathLike = "reports/performance
                  quick: bool = False, echo: Callable[[str], None] = print,
                  window: float | None = 20.0) -> Path:
     """Run sections by name, save each as JSON in ``<out without .md>/`` and rewrite the
-    report from every saved section (sections not run keep their last measurement).
+    report from every saved section (sections not run keep their last measurement, as do
+    sections that raise `SectionSkipped`: the reason is echoed in one line).
 
     `window`: seconds of each record in the work-precision study (None: whole records)."""
     out = Path(out)
@@ -160,7 +161,11 @@ def run_sections(names: list[str], out: str | os.PathLike = "reports/performance
     for n in names:
         t = time.perf_counter()
         echo(f"urmx bench: {n} ...")
-        data = _call(modules[n].run, quick, figures=folder, echo=echo, window=window)
+        try:
+            data = _call(modules[n].run, quick, figures=folder, echo=echo, window=window)
+        except SectionSkipped as exc:
+            echo(f"urmx bench: {n} skipped: {exc}")
+            continue
         save_section(folder, n, data, machine_info(), quick)
         echo(f"urmx bench: {n} done in {time.perf_counter() - t:.1f} s")
         write_report(out)

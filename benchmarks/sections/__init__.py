@@ -22,6 +22,7 @@ from . import (
     guard,
     hard_cases,
     kernel,
+    opensees,
     paper,
     startup,
     statuses,
@@ -29,7 +30,7 @@ from . import (
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility, statuses, startup]
+            fragility, statuses, startup, opensees]
 
 #: names on the command line that run several sections
 GROUPS = {

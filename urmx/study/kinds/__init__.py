@@ -111,9 +111,9 @@ def prepare(study: Any) -> tuple[str, Any]:
     return kind.name, kind.parse(study) if kind.parse is not None else None
 
 
-from . import grid, ida  # noqa: E402 - the built-in kinds, registered below
+from . import grid, ida, sampling  # noqa: E402 - the built-in kinds, registered below
 
 #: the kinds urmx comes with; the first needs no table (a study without one is this kind)
-BUILT_IN = (grid.KIND, ida.KIND)
+BUILT_IN = (grid.KIND, ida.KIND, sampling.KIND)
 for _kind in BUILT_IN:
     register(_kind)

@@ -228,11 +228,23 @@ def parse_distribution(table: Any) -> Distribution:
             low = 0.0
     if not low < high:
         raise ParameterError("high", f"low={low!r} must be below high={high!r}")
-    dist = Distribution(kind, (*args, low, high) if kind != "uniform" else (low, high))
-    if kind != "uniform" and dist.frozen().cdf(high) - dist.frozen().cdf(low) < 1e-9:
+    if kind != "uniform" and _mass(kind, args, low, high) < 1e-9:
         raise ParameterError("low", f"[{low:g}, {high:g}] holds almost none of the "
                              f"{kind} distribution (it lies far in one tail)")
-    return dist
+    return Distribution(kind, (*args, low, high) if kind != "uniform" else (low, high))
+
+
+def _mass(kind: str, args: list[float], low: float, high: float) -> float:
+    """The probability of [low, high] under the untruncated normal or lognormal."""
+    from scipy.stats import norm
+
+    if kind == "lognormal":
+        mu, sd = math.log(args[0]), args[1]
+        a = (math.log(low) - mu) / sd if low > 0 else -math.inf
+        b = (math.log(high) - mu) / sd if math.isfinite(high) else math.inf
+    else:
+        a, b = (low - args[0]) / args[1], (high - args[0]) / args[1]
+    return float(max(norm.cdf(b) - norm.cdf(a), norm.sf(a) - norm.sf(b)))
 
 
 def _choice_values(values: Any) -> tuple:

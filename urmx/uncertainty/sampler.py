@@ -93,7 +93,7 @@ class Target:
         if lo_ok and hi_ok and math.isfinite(value):
             return None
         hi = "inf" if math.isinf(self.high) else f"{self.high:g}"
-        return f"{value!r} lies outside its valid range {self.closed[0]}{self.low:g}, {hi}" \
+        return f"{value:g} lies outside its valid range {self.closed[0]}{self.low:g}, {hi}" \
                f"{self.closed[1]}"
 
 

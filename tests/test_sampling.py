@@ -499,3 +499,46 @@ def test_the_modelling_fit_parts_add_up():
     assert math.hypot(f["record_dispersion"], f["model_dispersion"]) == pytest.approx(
         f["total_dispersion"], rel=0.05)
     assert f["model_dispersion"] == pytest.approx(0.25, rel=0.3)
+
+
+# ---- the report ------------------------------------------------------------------------------
+
+def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records, tmp_path):
+    """`urmx uncertainty-report` writes REPORT.md and its figures from a sampling IDA
+    archive; its numbers are the archive's (the dispersions, the law's effect, the
+    strongest parameter); any other archive is refused in one line."""
+    import urmx.uncertainty_analysis as UA
+    from urmx.cli import main
+    from urmx.uncertainty_report import write_report
+
+    use_records(ACC, SCALE, DT)
+    path = make_study(STUDY.replace("samples = 5", "samples = 10") + IDA, "rep.toml")
+    ds = urmx.run_study(path, out=tmp_path / "rep.nc", scheduler="serial", progress=False)
+    out = tmp_path / "report"
+    assert main(["uncertainty-report", str(tmp_path / "rep.nc"), "--out", str(out)]) == 0
+    text = (out / "REPORT.md").read_text()
+    for name in ("sensitivity.png", "parameters.png", "spread.png", "fragility.png",
+                 "impact_law.png"):
+        assert (out / name).stat().st_size > 1000 and f"({name})" in text
+    spr, sens = UA.spread(ds), UA.sensitivity(ds)
+    beta = spr.total_dispersion.values
+    assert f"the dispersion is {beta.min():.2g} to {beta.max():.2g}" in text
+    top = UA.strongest(sens)
+    first = max(set(top.values.ravel()), key=lambda p: int((top == p).sum()))
+    assert f"is `{first}`'s in {int((top == first).sum())} of 4 wall" in text
+    eff = UA.law_effect(ds)
+    assert np.all(np.isfinite(eff)) and f"{float(eff.min()):.3g} to" in text
+    assert sens.prcc.dims == ("wall", "diaphragm", "parameter") and np.all(np.isfinite(
+        sens.prcc_low))
+    assert np.allclose(spr.model_share + spr.record_share + spr.interaction_share, 1.0)
+    assert write_report(ds, tmp_path / "again").read_text() == text.replace(
+        str(out), str(tmp_path / "again"))
+    plain = urmx.run_study(make_study(STUDY.replace("[study.sampling]", "[study.nothing]")
+                                      .split("[study.nothing]")[0], "grid.toml"),
+                           out=tmp_path / "grid.nc", scheduler="serial", progress=False)
+    assert "sample" not in plain.dims
+    done = subprocess.run([sys.executable, "-m", "urmx.cli", "uncertainty-report",
+                           str(tmp_path / "grid.nc"), "--out", str(tmp_path / "x")],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "not a sampling-study archive" in done.stderr

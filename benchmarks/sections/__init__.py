@@ -26,11 +26,12 @@ from . import (
     paper,
     startup,
     statuses,
+    uncertainty,
     work_precision,
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility, statuses, startup, opensees]
+            fragility, statuses, startup, opensees, uncertainty]
 
 #: names on the command line that run several sections
 GROUPS = {

@@ -144,8 +144,9 @@ def sobol_indices(unit, y, method: str, seed: int = 0, conf_level: float = CONF_
         return {k: np.asarray(si[k], dtype=float) for k in ("S1", "S1_conf", "ST", "ST_conf")}
     from SALib.analyze import rbd_fast
 
-    si = rbd_fast.analyze(_problem(d), unit, y, M=harmonics(n), num_resamples=resamples,
-                          conf_level=conf_level, seed=seed)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a bootstrap of a constant output
+        si = rbd_fast.analyze(_problem(d), unit, y, M=harmonics(n), num_resamples=resamples,
+                              conf_level=conf_level, seed=seed)
     return {"S1": np.asarray(si["S1"], dtype=float),
             "S1_conf": np.asarray(si["S1_conf"], dtype=float), "ST": nan,
             "ST_conf": nan.copy()}

@@ -188,28 +188,56 @@ def _law_findings(ds: xr.Dataset, found: dict) -> list[str]:
     lines = [f"- **Impact law.** With the `contact` law the samples' median collapse "
              f"intensity is {_range(eff)} times that with `scale` (geometric means over each "
              "law's samples, per wall and diaphragm)."]
+    return lines + _stiffening_findings(ds, found) + _other_findings(found)
+
+
+def _agree(values: dict[str, float], reference: float) -> str:
+    """Whether each law's value lies on the same side of `reference`."""
+    sides = {law: np.sign(v - reference) for law, v in values.items() if np.isfinite(v)}
+    if len(sides) < 2:
+        return ""
+    return ("the laws agree on the direction" if len(set(sides.values())) == 1
+            else "**the laws disagree on the direction**")
+
+
+def _stiffening_findings(ds: xr.Dataset, found: dict) -> list[str]:
+    """Per supports group: each law's median D4/D1 ratio and whether, wall by wall, the
+    laws agree on whether stiffening raises the median."""
     stf = {law: v["stiffening"] for law, v in found.items()}
+    lines = []
     for g in [g for g in FA.GROUPS if all(g in s for s in stf.values())]:
         parts = [f"{_fmt(_median(s[g]), 3)} under `{law}` (the median rises in "
                  f"{_pct(s[g] > 1, s[g])} of samples x walls)" for law, s in stf.items()]
+        differ = [str(w) for i, w in enumerate(ds.wall.values)
+                  if len({np.sign(_median(s[g][:, i]) - 1) for s in stf.values()}) > 1]
+        verdict = (f"wall by wall the laws agree on whether it rises for "
+                   f"{ds.wall.size - len(differ)} of {ds.wall.size} walls"
+                   + (f"; **not for {', '.join(differ)}**" if differ else ""))
         lines.append(f"- **Stiffening {FA.STIFFEN[0]} -> {FA.STIFFEN[1]}, "
-                     f"{FA.GROUPS[g].split(' (')[0]} walls.** The median ratio D4/D1 is "
-                     + "; ".join(parts) + ".")
-    parts = [f"{_fmt(_median(v['slenderness']), 2)} under `{law}` (negative in "
+                     f"{FA.GROUPS[g].split(' (')[0]} walls.** The median ratio D4/D1 (median "
+                     "over samples and walls) is " + "; ".join(parts) + f": {verdict}.")
+    return lines
+
+
+def _other_findings(found: dict) -> list[str]:
+    """The slenderness trend and the resonance under each law."""
+    rho = {law: _median(v["slenderness"]) for law, v in found.items()}
+    parts = [f"{_fmt(rho[law], 2)} under `{law}` (negative in "
              f"{_pct(v['slenderness'] < 0, v['slenderness'])} of samples x diaphragms)"
              for law, v in found.items()]
-    lines.append("- **Slenderness.** The Spearman rank correlation of the median with h/t "
-                 "(median over samples and diaphragms) is " + "; ".join(parts) + ".")
+    lines = ["- **Slenderness.** The Spearman rank correlation of the median with h/t "
+             "(median over samples and diaphragms) is " + "; ".join(parts)
+             + f": {_agree(rho, 0.0)}."]
     for g in [g for g in FA.GROUPS if all(_has(v["resonance"], g) for v in found.values())]:
-        parts = []
-        for law, v in found.items():
-            near = next(m for lo, hi, n, m in FA.binned(v["resonance"], g) if lo <= 1 < hi)
-            parts.append(f"{_fmt(math.exp(near), 3) if np.isfinite(near) else '-'} under "
-                         f"`{law}`")
+        near = {law: next(m for lo, hi, n, m in FA.binned(v["resonance"], g) if lo <= 1 < hi)
+                for law, v in found.items()}
+        parts = [f"{_fmt(math.exp(m), 3) if np.isfinite(m) else '-'} under `{law}`"
+                 for law, m in near.items()]
         lines.append(f"- **Resonance, {FA.GROUPS[g].split(' (')[0]} walls.** Where the "
                      "record's predominant frequency is within 0.8-1.25 of the diaphragm's, a "
                      "capacity is a median " + "; ".join(parts) + " times the same wall, "
-                     "record and sample's geometric mean over the group's diaphragms.")
+                     "record and sample's geometric mean over the group's diaphragms: "
+                     f"{_agree(near, 0.0)}.")
     return lines
 
 
@@ -261,7 +289,10 @@ def _sensitivity(ds: xr.Dataset, sens: xr.Dataset, out: Path) -> list[str]:
                   "parameter explains alone; RBD-FAST on the design, SALib, with a bootstrap "
                   "95 % half width), median over the cells: " + ", ".join(
                       f"`{p}` {_fmt(float(s1.sel(parameter=p)), 2)} +- "
-                      f"{_fmt(float(conf.sel(parameter=p)), 2)}" for p in names) + ".", ""]
+                      f"{_fmt(float(conf.sel(parameter=p)), 2)}" for p in names) + "."
+                  + (" At this number of samples the bootstrap intervals are wide: S1 only "
+                     "ranks the parameters coarsely, and the PRCC's intervals are the firmer "
+                     "answer." if float(conf.median()) > 0.2 else ""), ""]
         if np.any(np.isfinite(sens.st)):
             st = sens.st.median(["wall", "diaphragm"])
             lines += ["Total Sobol' index ST (the share with all interactions; Saltelli "
@@ -324,6 +355,8 @@ def _plot_parameters(ds: xr.Dataset) -> list:
         ax.set_yscale("log")
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize="x-small", title="impact law", markerscale=4)
+    for ax in axes[0].figure.axes[len(axes):]:
+        ax.set_visible(False)
     return axes
 
 
@@ -392,7 +425,7 @@ def _plot_fragility(ds: xr.Dataset, spr: xr.Dataset) -> list:
     f, unit = P.display_scale(ds.collapse_intensity.attrs.get("units", ""))
     labels = [str(d) for d in ds.diaphragm.values]
     axes = P.panels(None, len(labels), ncols=2)
-    top = float(spr.total_median_collapse_intensity.max()) * f * 3.0
+    top = float(spr.total_median_collapse_intensity.max()) * f * 2.2
     x = np.linspace(top * 1e-3, top, 300)
     cmap = P._slenderness_colors(ds)
     for ax, d in zip(axes, labels, strict=True):

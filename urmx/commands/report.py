@@ -27,6 +27,8 @@ def run(args) -> int:
     from urmx.errors import check_output, writing
     from urmx.report import report_folders, write_report
 
+    if args.out is not None:  # a bad --out is said before any archive is read
+        check_output(args.out, "--out", folder=True)
     paper, folder, own = report_folders(args.archives, args.out)
     for where in ([folder] if folder else []) + [where for _, _, where in own]:
         check_output(where, "--out", folder=True)

@@ -150,3 +150,17 @@ def test_installed_wheel_runs_outside_the_checkout(installed, tmp_path, records_
     bench = _urmx(installed, work, "bench", "kernel", records=records_dir)
     assert bench.returncode == 2 and len(bench.stderr.strip().splitlines()) == 1
     assert "source checkout" in bench.stderr
+
+
+def test_what_needs_a_checkout_says_so_in_one_line(tmp_path, monkeypatch, capsys):
+    """An installed urmx (no checkout above the package) refuses to store a guard baseline
+    without --baseline, before measuring anything, and reads its data from the package."""
+    import urmx.config
+
+    monkeypatch.setattr(urmx.config, "project_root", lambda: tmp_path)
+    assert urmx.config.checkout() is None
+    assert urmx.config.data_dir("catalog").parts[-3:] == ("urmx", "_data", "catalog")
+    assert main(["bench", "guard", "--update"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert "guard --update needs a source checkout of urmx" in err

@@ -386,6 +386,12 @@ def test_an_ida_sampling_study_fits_records_and_samples_together(make_study, use
     assert ds.attrs["intensity_measure"] == "pga" and ds.rocking_period.dims == (
         "wall", "diaphragm", "sample")
     assert np.all(np.isfinite(ds.predominant_frequency.values))
+    from urmx.study import kinds, summary
+
+    assert summary.kind_of(ds) == "sampling"
+    assert kinds.get("sampling").counts(ds) == {"collapsed": int((ds.censored == 0).sum()),
+                                                "censored": int(ds.censored.sum()),
+                                                "missing": 0}
 
 
 HEAVY = ("xarray", "dask", "distributed", "obspy", "pandas", "SALib")

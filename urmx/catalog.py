@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .config import project_root
+from .config import data_dir
 from .errors import MissingFileError, UrmxError
 from .model import PAPER_G, RIGID, Wall
 
@@ -81,8 +81,9 @@ def damping_problem(table: dict) -> str | None:
 
 
 def catalog_dir(path: str | os.PathLike | None = None) -> Path:
-    """The catalog folder: `path`, else ``catalog/`` of the source checkout."""
-    return Path(path) if path is not None else project_root() / "catalog"
+    """The catalog folder: `path`, else ``catalog/`` of the source checkout, or the copy an
+    installed wheel carries (`urmx.config.data_dir`)."""
+    return Path(path) if path is not None else data_dir("catalog")
 
 
 # ---- locating keys in TOML text for error messages -------------------------------------

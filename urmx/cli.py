@@ -17,7 +17,8 @@ import os
 import sys
 from pathlib import Path
 
-COMMANDS = ("simulate", "records", "study", "report", "bench", "fragility", "uncertainty")
+COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility",
+            "uncertainty")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -15,6 +15,11 @@
   diaphragm's;
 - ``stiffening.png``: the effect of stiffening a diaphragm from D1 to D4 on the median.
 
+A section an archive cannot answer is left out and named, with what it needs: the
+slenderness section a rank correlation over `MIN_WALLS` walls, the resonance section two
+flexible diaphragms, the stiffening section D1 and D4; so an archive of one or two walls
+gets the rest of the report.
+
 Acceleration measures are shown in g (stored in m s-2).
 """
 
@@ -43,6 +48,8 @@ __all__ = ["write_report", "open_ida", "plot_ida_curves", "plot_fragility_curves
            "plot_median", "plot_resonance", "plot_stiffening", "resonance_table", "stiffening",
            "GROUPS", "STIFFEN"]
 resonance_table, stiffening = FA.resonance_table, FA.stiffening
+#: walls a rank correlation with slenderness needs (`urmx.analysis.spearman`)
+MIN_WALLS = 3
 
 
 def open_ida(archive) -> xr.Dataset:
@@ -89,7 +96,8 @@ def write_report(archive, out_dir: str | os.PathLike) -> Path:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     d = FA.first_cor(ds)
-    ranks, t, stf = FA.slenderness_ranks(d), FA.resonance_table(ds), FA.stiffening(ds)
+    ranks = FA.slenderness_ranks(d) if d.wall.size >= MIN_WALLS else None
+    t, stf = FA.resonance_table(ds), FA.stiffening(ds)
     lines = [*_header(ds, d), *_findings(d, ranks, t, stf), *_medians(ds, d),
              *_curves(ds, d, out), *_slenderness(ds, d, ranks, out), *_resonance(ds, t, out),
              *_stiffening(d, stf, out)]
@@ -170,8 +178,16 @@ def _curves(ds: xr.Dataset, d: xr.Dataset, out: Path) -> list[str]:
                     _save(P.plot_fragility_curves(ds), out, "fragility_curves.png"), ""]
 
 
-def _slenderness(ds: xr.Dataset, d: xr.Dataset, ranks: dict, out: Path) -> list[str]:
+def _too_few_walls(d: xr.Dataset) -> str:
+    return (f"needs at least {MIN_WALLS} walls for a rank correlation with h/t; the archive "
+            f"has {d.wall.size}")
+
+
+def _slenderness(ds: xr.Dataset, d: xr.Dataset, ranks: dict | None, out: Path) -> list[str]:
     """Does h/t predict stability: rank correlations and the stocky/slender ratio."""
+    if ranks is None:
+        return ["## Does slenderness predict stability?", "",
+                f"_Left out: this section {_too_few_walls(d)}._", ""]
     lo_w, hi_w = ranks["stocky"], ranks["slender"]
     rows = []
     for i, lab in enumerate(str(x) for x in d.diaphragm.values):
@@ -238,10 +254,25 @@ def _stiffening(d: xr.Dataset, stf: dict, out: Path) -> list[str]:
 
 # ---- the findings: the answers in numbers, computed (so they stay true when regenerated) ----
 
-def _findings(d: xr.Dataset, ranks: dict, t: xr.Dataset, stf: dict) -> list[str]:
-    """The findings section: one bullet per question the report answers."""
-    return (["## Findings", "", _slenderness_finding(d, ranks)] + _resonance_findings(t)
-            + [_stiffening_finding(g, v) for g, v in stf.items()] + [""])
+def _findings(d: xr.Dataset, ranks: dict | None, t: xr.Dataset, stf: dict) -> list[str]:
+    """The findings section: one bullet per question the report answers (and one per
+    question it leaves out, saying what it needs)."""
+    slender = (_slenderness_finding(d, ranks) if ranks is not None else
+               f"- **Slenderness.** Left out: it {_too_few_walls(d)}.")
+    return (["## Findings", "", slender] + _resonance_findings(t)
+            + [_stiffening_finding(g, v) for g, v in stf.items()] + _left_out(t, stf) + [""])
+
+
+def _left_out(t: xr.Dataset, stf: dict) -> list[str]:
+    """Bullets naming the questions of the findings the archive cannot answer."""
+    lines = []
+    if not t.cell.size:
+        lines.append("- **Resonance.** Left out: it needs two flexible diaphragms of one "
+                     "supports group with collapses on both.")
+    if not stf:
+        lines.append(f"- **Stiffening.** Left out: it needs diaphragms {STIFFEN[0]} and "
+                     f"{STIFFEN[1]} of one supports group.")
+    return lines
 
 
 def _slenderness_finding(d: xr.Dataset, ranks: dict) -> str:

@@ -26,7 +26,7 @@ def register(sub) -> None:
 
     p = sub.add_parser("calibrate", help="fit the parametric building, write "
                        "reports/calibration.md")
-    p.add_argument("--out", default=None, help="report folder (default: the checkout's reports/)")
+    p.add_argument("--out", default=None, help="report folder (default: reports/)")
     p.set_defaults(handler=_calibrate)
 
 

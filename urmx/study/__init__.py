@@ -18,6 +18,8 @@ names. The kind-blind engine runs them all:
 - `urmx.study.dataset`: the status vocabulary (:data:`STATUS`), the shared coordinates
   (:func:`grid_coords`) and global attributes (:func:`global_attrs`);
 - `urmx.study.archive`: :func:`open_study`;
+- `urmx.study.summary`: :func:`info` (what an archive holds and how it was made) and
+  :func:`diff` (what differs between two archives), ``urmx info`` and ``urmx diff``;
 - `urmx.study.samples`: :func:`resolve_records`, a study's records as
   `urmx.records.Record`.
 
@@ -39,11 +41,12 @@ _PUBLIC = {
     "STATUS": "dataset", "NOT_RUN": "dataset", "VALID": "dataset", "MISSING": "dataset",
     "grid_coords": "dataset", "global_attrs": "dataset", "status_names": "dataset",
     "open_study": "archive",
+    "info": "summary", "diff": "summary", "format_info": "summary", "format_diff": "summary",
     "resolve_records": "samples", "RecordData": "samples",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
 _SUBMODULES = ("engine", "batches", "parts", "clients", "progress", "dataset", "archive",
-               "samples", "kinds")
+               "samples", "kinds", "summary")
 __all__ = sorted(_PUBLIC)
 
 

@@ -43,6 +43,10 @@ asks which one it is: it parses nothing, cuts nothing and assembles nothing itse
 ``reopen(ds) -> Dataset or None``
     For `urmx.open_study`: masks an archive of an older urmx of this kind (None when the
     archive is not this kind's or needs nothing); optional.
+``counts(ds) -> dict or None``
+    For `urmx.study.info` (``urmx info``): how many cells of an archive end in each way
+    (``{"ok": 40, "collapsed": 23, ...}``, the cells partitioned, missing ones included),
+    or None when `ds` is not this kind's archive; optional.
 
 A new kind is one module holding its `Kind`, added to :data:`BUILT_IN` here, or registered
 from outside with ``urmx.study.kinds.register(kind)`` (a test's toy kind does so).

@@ -276,5 +276,14 @@ def reopen(ds: xr.Dataset) -> xr.Dataset | None:
     return ds
 
 
+def counts(ds: xr.Dataset) -> dict[str, int] | None:
+    """The grid's cells by status (``ok``, ``collapsed``, ``event-limit``, ``not-run``);
+    None when `ds` has no ``status``."""
+    if "status" not in ds.data_vars:
+        return None
+    status = np.asarray(ds["status"].values)
+    return {name: int((status == code).sum()) for code, name in enumerate(STATUS)}
+
+
 KIND = Kind(name="grid", unit="analyses", outputs=BATCH_OUTPUTS, tasks=tasks, run=run_batch,
-            assemble=assemble, reopen=reopen)
+            assemble=assemble, reopen=reopen, counts=counts)

@@ -297,5 +297,15 @@ def reopen(ds: xr.Dataset) -> xr.Dataset | None:
     return ds
 
 
+def counts(ds: xr.Dataset) -> dict[str, int] | None:
+    """The cells of an IDA archive: ``collapsed`` (a capacity), ``censored`` (survived
+    max_intensity) and ``missing`` (not run); None when `ds` is not an IDA archive."""
+    if "collapse_intensity" not in ds.data_vars or "censored" not in ds.data_vars:
+        return None
+    censored = np.asarray(ds["censored"].values, dtype=np.float64)
+    return {"collapsed": int((censored == 0).sum()), "censored": int((censored == 1).sum()),
+            "missing": int(np.isnan(censored).sum())}
+
+
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
-            tasks=tasks, run=run_batch, assemble=assemble, reopen=reopen)
+            tasks=tasks, run=run_batch, assemble=assemble, reopen=reopen, counts=counts)

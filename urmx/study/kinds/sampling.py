@@ -460,6 +460,16 @@ def assemble(study: Any, records: dict, tasks: list, results: dict,
     return xr.Dataset(data_vars, coords=coords, attrs=_attrs(study, attrs))
 
 
+def counts(ds: xr.Dataset) -> dict[str, int] | None:
+    """The cells of a sampling archive as the IDA kind (capacities) or the grid (time
+    histories) counts them; None when `ds` has no ``sample`` dimension."""
+    if "sample" not in ds.dims:
+        return None
+    from . import grid, ida
+
+    return ida.counts(ds) if "collapse_intensity" in ds.data_vars else grid.counts(ds)
+
+
 KIND = Kind(name="sampling", table="sampling", combines=("ida",), unit="cells",
             outputs=OUTPUTS, parse=parse, dims=dims, tasks=tasks, run=run_batch,
-            assemble=assemble)
+            assemble=assemble, counts=counts)

@@ -419,6 +419,16 @@ def _plot_spread(spr: xr.Dataset) -> list:
     return axes
 
 
+def _wall_colors(ds: xr.Dataset) -> dict[str, tuple]:
+    """A colour per wall, by slenderness (viridis)."""
+    from matplotlib import colormaps
+
+    s = ds.slenderness.values
+    span = max(float(np.ptp(s)), 1e-9)
+    return {str(w): colormaps["viridis"](0.9 * (float(v) - s.min()) / span)
+            for w, v in zip(ds.wall.values, s, strict=True)}
+
+
 def _plot_fragility(ds: xr.Dataset, spr: xr.Dataset) -> list:
     from scipy.stats import norm
 
@@ -427,7 +437,7 @@ def _plot_fragility(ds: xr.Dataset, spr: xr.Dataset) -> list:
     axes = P.panels(None, len(labels), ncols=2)
     top = float(spr.total_median_collapse_intensity.max()) * f * 2.2
     x = np.linspace(top * 1e-3, top, 300)
-    cmap = P._slenderness_colors(ds)
+    cmap = _wall_colors(ds)
     for ax, d in zip(axes, labels, strict=True):
         for w in ds.wall.values:
             c = spr.sel(wall=w, diaphragm=d)
@@ -473,6 +483,8 @@ def _impact_law(ds: xr.Dataset, found: dict, out: Path) -> list[str]:
 
 
 def _plot_laws(ds: xr.Dataset, found: dict) -> list:
+    from matplotlib.ticker import FormatStrFormatter
+
     axes = P.panels(None, 3, ncols=3)
     names = list(found)
     groups = [g for g in FA.GROUPS if all(g in v["stiffening"] for v in found.values())]
@@ -505,7 +517,8 @@ def _plot_laws(ds: xr.Dataset, found: dict) -> list:
                          label=f"{law}, {FA.GROUPS[g].split(' (')[0]}")
     axes[2].axvline(1.0, color="k", lw=0.8, ls=":")
     axes[2].axhline(1.0, color="k", lw=0.8)
-    P._log_x(axes[2])
+    axes[2].set_xscale("log")
+    axes[2].xaxis.set_major_formatter(FormatStrFormatter("%g"))
     axes[2].set_xlabel("record predominant / diaphragm frequency [1]")
     axes[2].set_ylabel("binned median relative capacity [1]")
     axes[2].set_title("resonance", fontsize=9)

@@ -61,9 +61,9 @@ def tasks(study: Any, records: dict, batch_size: int = 16,
                                                                       batch_size)]
 
 
-def _unrun(shape) -> dict[str, np.ndarray]:
+def unrun(shape) -> dict[str, np.ndarray]:
     """A batch's output arrays before its cells run: NaN, INT_FILL for integers, status
-    not_run."""
+    not_run (the sampling kind's time histories start from them too)."""
     out: dict[str, np.ndarray] = {}
     for name in variables.SCALARS:
         if name in variables.INTEGER_SCALARS:
@@ -82,7 +82,7 @@ def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.nd
         from ...kernel import run as kernel
     nw, nz = len(task["walls"]), len(task["walls"][0])
     shape = (nw, len(task["cor"]), len(task["scale"]), len(task["impact"]), nz)
-    out = _unrun(shape)
+    out = unrun(shape)
     hist = {(iw, ic): label for iw, ic, label in task["history"]}
     labels = []
     for iw, ic, isc, ii, iz in np.ndindex(*shape):
@@ -138,7 +138,9 @@ def _outputs(study: Any, tasks: list, results: dict) -> dict[str, np.ndarray]:
     return data
 
 
-def _output_attrs(name: str) -> dict[str, Any]:
+def output_attrs(name: str) -> dict[str, Any]:
+    """Attributes of a grid output (the sampling kind's time histories too): the
+    registry's, with what a missing cell holds (the status' CF flags)."""
     from ..dataset import status_attrs
 
     if name == "status":
@@ -173,7 +175,7 @@ def assemble(study: Any, records: dict, tasks: list, results: dict,
     from ..dataset import grid_coords
 
     names = list(study.dims)
-    data_vars = {name: xr.Variable(names, arr, attrs=_output_attrs(name))
+    data_vars = {name: xr.Variable(names, arr, attrs=output_attrs(name))
                  for name, arr in _outputs(study, tasks, results).items()}
     coords = {**grid_coords(study, records), **_added_coords(study)}
     if study.histories:

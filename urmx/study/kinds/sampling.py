@@ -207,10 +207,10 @@ def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.nd
 
 
 def _histories(task: dict, acceleration: np.ndarray, kernel: Callable) -> dict:
-    from .grid import _unrun
+    from .grid import unrun
 
     shape = tuple(task["shape"])
-    out = _unrun(shape)
+    out = unrun(shape)
     for i, wall in enumerate(task["walls"]):
         at = np.unravel_index(i, shape)
         result = kernel(wall, acceleration, task["dt"], scale=task["scale_factor"],
@@ -269,7 +269,7 @@ def _history_vars(study: Any, tasks: list, results: dict) -> dict[str, xr.Variab
     import xarray as xr
 
     from ..dataset import cell_array
-    from .grid import _output_attrs
+    from .grid import output_attrs
 
     shape, batches = _shape(study), [b for b, _ in tasks]
     status = cell_array(shape, batches, results, "status", _on_block, NOT_RUN, np.int8)
@@ -278,8 +278,8 @@ def _history_vars(study: Any, tasks: list, results: dict) -> dict[str, xr.Variab
     for name in variables.SCALARS:
         values = cell_array(shape, batches, results, name, _on_block)
         values[invalid] = np.nan
-        out[name] = xr.Variable(DIMS, values, attrs=_output_attrs(name))
-    out["status"] = xr.Variable(DIMS, status, attrs=_output_attrs("status"))
+        out[name] = xr.Variable(DIMS, values, attrs=output_attrs(name))
+    out["status"] = xr.Variable(DIMS, status, attrs=output_attrs("status"))
     return out
 
 

@@ -23,6 +23,7 @@ class Kind:
     parse: Callable[[Any], Any] | None = None
     dims: Callable[[Any], dict[str, list]] | None = None
     reopen: Callable[[Any], Any] | None = None
+    keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""

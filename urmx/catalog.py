@@ -225,15 +225,15 @@ class _Source:
         where = f"{self.path}:{line}" if line else str(self.path)
         return CatalogError(f"{where}: {key}: {message}")
 
-    def check_keys(self, key: str, table: dict, known: tuple[str, ...],
-                   *needles: str) -> None:
+    def check_keys(self, key: str, table: dict, known: tuple[str, ...], *needles: str,
+                   what: str = "") -> None:
         """Refuse a key of `table` (the table `key`) that is not in `known`, naming the
-        close ones."""
+        close ones (`what`: the kind of key, ``"wall "``)."""
         for name in table:
             if name not in known:
                 close = difflib.get_close_matches(name, known, n=2)
                 hint = f"did you mean {' or '.join(map(repr, close))}? " if close else ""
-                raise self.error(f"{key}.{name}".lstrip("."), f"unknown key {name!r} "
+                raise self.error(f"{key}.{name}".lstrip("."), f"unknown {what}key {name!r} "
                                  f"({hint}known: {', '.join(known)})", *needles, name)
 
 
@@ -375,7 +375,7 @@ def _wall_from_table(src: _Source, key: str, table: dict, known: tuple[str, ...]
     ``key`` is the table's dotted key ("" at the top level). The one TOML-to-Wall loader:
     catalog walls, study walls and wall files (:func:`read_wall`)."""
     where = (key,) if key else ()
-    src.check_keys(key, table, known, *where)
+    src.check_keys(key, table, known, *where, what="wall ")
     if any(k in table for k in (*MASS_TERMS, *DIAPHRAGM_TERMS)):
         return _building_wall(src, key, table)
     values = {k: table[k] for k in (*WALL_FIELDS, "allow_unusual") if k in table}

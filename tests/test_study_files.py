@@ -187,6 +187,8 @@ def test_a_folder_of_records_is_one_id_per_file(tmp_path, make_study):
     ("[records.mine]\n", '[records.mine]\nchanel = "X"\n', r"records\.mine\.chanel: "
      r"unknown key 'chanel' \(did you mean 'channel'"),
     ('unit = "cm/s2"', 'unit = "furlongs"', r"records\.mine\.unit: 'furlongs' is not one"),
+    ("dt = 0.02", "dt = 1e-7\nallow_unusual = true", r"records\.mine: data/my-record\.txt: "
+     r"time step dt=1e-07 s is not above the kernel's merged-impact window"),
 ])
 def test_bad_own_records_are_refused_with_their_table(own_study, old, new, pattern):
     text = own_study.read_text()

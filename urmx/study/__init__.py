@@ -18,8 +18,9 @@ names. The kind-blind engine runs them all:
 - `urmx.study.dataset`: the status vocabulary (:data:`STATUS`), the shared coordinates
   (:func:`grid_coords`) and global attributes (:func:`global_attrs`);
 - `urmx.study.archive`: :func:`open_study`;
-- `urmx.study.samples`: :func:`resolve_records`, a study's records as
-  `urmx.records.Record`.
+- `urmx.study.samples`: :func:`resolve_records`, a study's records (manifest ids and the
+  study file's own record files) as `urmx.records.Record`, with their provenance;
+- `urmx.study.limits`: what a study may hold (``MAX_VALUES`` values a dimension).
 
 The names are loaded on first use so that `urmx.catalog` can reach the kinds (to parse a
 study's ``[study.<kind>]`` table) without importing the engine, which imports the catalog.
@@ -43,7 +44,7 @@ _PUBLIC = {
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
 _SUBMODULES = ("engine", "batches", "parts", "clients", "progress", "dataset", "archive",
-               "samples", "kinds")
+               "samples", "kinds", "limits")
 __all__ = sorted(_PUBLIC)
 
 

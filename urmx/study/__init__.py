@@ -20,8 +20,9 @@ names. The kind-blind engine runs them all:
 - `urmx.study.archive`: :func:`open_study`;
 - `urmx.study.summary`: :func:`info` (what an archive holds and how it was made) and
   :func:`diff` (what differs between two archives), ``urmx info`` and ``urmx diff``;
-- `urmx.study.samples`: :func:`resolve_records`, a study's records as
-  `urmx.records.Record`.
+- `urmx.study.samples`: :func:`resolve_records`, a study's records (manifest ids and the
+  study file's own record files) as `urmx.records.Record`, with their provenance;
+- `urmx.study.limits`: what a study may hold (``MAX_VALUES`` values a dimension).
 
 The names are loaded on first use so that `urmx.catalog` can reach the kinds (to parse a
 study's ``[study.<kind>]`` table) without importing the engine, which imports the catalog.
@@ -46,7 +47,7 @@ _PUBLIC = {
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
 _SUBMODULES = ("engine", "batches", "parts", "clients", "progress", "dataset", "archive",
-               "samples", "kinds", "summary")
+               "samples", "kinds", "summary", "limits")
 __all__ = sorted(_PUBLIC)
 
 

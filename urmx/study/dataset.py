@@ -134,8 +134,13 @@ def _diaphragm_coords(study: Any) -> dict[str, xr.Variable]:
 
 
 def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
+    """The record dimension: ids, peaks, scale factors, time steps, and where each record
+    comes from (`urmx.records.record.PROVENANCE`: file, SHA-256, format, channel, unit,
+    source, processing, points; empty strings for records given in memory)."""
+    from ..records.record import PROVENANCE
+
     recs = [records[r] for r in study.records]
-    return {
+    coords = {
         "record": coord("record", "record", np.array(study.dims["record"], dtype=object)),
         "pga": coord("pga", "record", np.array([r.pga for r in recs])),
         "scale_factor": coord("scale_factor", "record",
@@ -144,6 +149,12 @@ def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
                             np.array([r.pga * r.scale_factor for r in recs])),
         "record_dt": coord("record_dt", "record", np.array([r.dt for r in recs])),
     }
+    given = [r.provenance() for r in recs]
+    for name in PROVENANCE:
+        values = [g[name] for g in given]
+        coords[name] = coord(name, "record", np.array(
+            values, dtype=np.int64 if name == "record_npts" else object))
+    return coords
 
 
 def grid_coords(study: Any, records: dict) -> dict[str, xr.Variable]:

@@ -66,16 +66,19 @@ class IdaSettings:
         return dataclasses.asdict(self)
 
 
+#: the keys of ``[study.ida]`` (the fields of `IdaSettings`)
+KEYS = ("im", "rtol", "step", "max_intensity")
+
+
 def parse(study: Any) -> IdaSettings:
     """Validate ``[study.ida]`` and the grid it runs on (errors name file, key and line)."""
     table = study.tables["ida"]
     if not isinstance(table, dict):
         raise study.error("study.ida", "must be a table (im, rtol, step, max_intensity)",
                           "ida")
-    known = ("im", "rtol", "step", "max_intensity")
     for k in table:
-        if k not in known:
-            raise study.error(f"study.ida.{k}", f"unknown key (known: {', '.join(known)})",
+        if k not in KEYS:
+            raise study.error(f"study.ida.{k}", f"unknown key (known: {', '.join(KEYS)})",
                               "ida", k)
     im = table.get("im", IdaSettings.im)
     if im not in fragility.IMS:
@@ -100,7 +103,31 @@ def parse(study: Any) -> IdaSettings:
                               "a dimension here", k)
     if study.histories:
         raise study.error("study.history", "an IDA study keeps no time histories", "history")
-    return IdaSettings(im=im, **values)
+    settings = IdaSettings(im=im, **values)
+    _check_learnable(study, settings)
+    return settings
+
+
+def _check_learnable(study: Any, settings: IdaSettings) -> None:
+    """Refuse a ``max_intensity`` below the search's first analysis in every cell: each
+    cell would be analysed once, at max_intensity, and (surviving it, as the search expects
+    below half a wall's static acceleration) censored there, so the study could learn no
+    capacity. Checked for ``im = "pga"``, whose start depends on the wall alone
+    (`urmx.fragility.START_FRACTION` of its `static_acceleration`); the other measures'
+    starts depend on the records, which are read after loading."""
+    if settings.im != "pga":
+        return
+    starts = [(fragility.START_FRACTION * fragility.static_acceleration(study.wall(w, d)),
+               w.id, d.id) for w in study.walls for d in study.diaphragms]
+    least = min(starts)
+    if settings.max_intensity < least[0]:
+        raise study.error(
+            "study.ida.max_intensity", f"{settings.max_intensity:g} m s-2 lies below where "
+            f"the collapse search starts in every cell ({fragility.START_FRACTION:g} x the "
+            f"wall's static acceleration; the least: {least[0]:.3g} m s-2, wall "
+            f"{least[1]!r} on {least[2]!r}): every cell would be analysed once, at "
+            "max_intensity, and censored there, so nothing could be learnt; raise it "
+            f"(default {fragility.MAX_INTENSITY['pga']:g} m s-2, 5 g)", "ida", "max_intensity")
 
 
 def dims(study: Any) -> dict[str, list]:
@@ -308,4 +335,5 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 
 
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
-            tasks=tasks, run=run_batch, assemble=assemble, reopen=reopen, counts=counts)
+            tasks=tasks, run=run_batch, assemble=assemble, reopen=reopen, counts=counts,
+            keys=KEYS)

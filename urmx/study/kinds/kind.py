@@ -24,6 +24,7 @@ class Kind:
     dims: Callable[[Any], dict[str, list]] | None = None
     reopen: Callable[[Any], Any] | None = None
     counts: Callable[[Any], dict[str, int] | None] | None = None
+    keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""

@@ -46,6 +46,8 @@ if TYPE_CHECKING:
     import xarray as xr
 
 DIMS = ("wall", "diaphragm", "record", "sample")
+#: the keys of ``[study.sampling]`` (`urmx.uncertainty.sampler.KEYS`; docs/study-files.md)
+SAMPLING_KEYS = ("samples", "seed", "method", "parameters")
 OUTPUTS = ("status",)  # every batch returns it (capacity batches: collapsed or censored)
 CAPACITY_OUTPUTS = ("capacity", "censored", "analyses", "event_limits", "intensity", "ratio",
                     "unit", "predominant")
@@ -472,4 +474,4 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 
 KIND = Kind(name="sampling", table="sampling", combines=("ida",), unit="cells",
             outputs=OUTPUTS, parse=parse, dims=dims, tasks=tasks, run=run_batch,
-            assemble=assemble, counts=counts)
+            assemble=assemble, counts=counts, keys=SAMPLING_KEYS)

@@ -152,7 +152,7 @@ def test_all_workers_lost_ends_the_run_and_a_rerun_finishes(external, cluster_st
     args = ["run", str(cluster_study), "--out", str(out), "--scheduler", external.address,
             "--batch-size", "1", "--worker-timeout", "2", "--quiet"]
     proc = C.urmx_run(args)
-    C.wait_until(lambda: C.parts_of(out) >= 4, 60, "4 batches saved", proc)
+    C.wait_until(lambda: C.parts_of(out) >= 4, C.START, "4 batches saved", proc)
     for w in workers:
         external.kill(w)
     _, err = proc.communicate(timeout=ENDS_WITHIN)
@@ -181,7 +181,7 @@ def test_the_scheduler_lost_ends_the_run_and_a_rerun_finishes(external, cluster_
     out = tmp_path / "gone.nc"
     proc = C.urmx_run(["run", str(cluster_study), "--out", str(out), "--scheduler",
                        external.address, "--batch-size", "1", "--quiet"])
-    C.wait_until(lambda: C.parts_of(out) >= 4, 60, "4 batches saved", proc)
+    C.wait_until(lambda: C.parts_of(out) >= 4, C.START, "4 batches saved", proc)
     external.kill(external.scheduler)
     _, err = proc.communicate(timeout=ENDS_WITHIN)
     line = _one_line(err)

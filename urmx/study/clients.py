@@ -359,19 +359,27 @@ class Watch:
                            f"{self.timeout:g} s (urmx.worker-timeout; --worker-timeout)")
 
 
+#: the loggers of this process's side of a dask cluster (levels set by dask's config)
+CLIENT_LOGGERS = ("distributed", "distributed.client", "distributed.batched",
+                  "distributed.core", "distributed.comm")
+
+
 @contextlib.contextmanager
 def quiet_client():
-    """While a run waits on its cluster, the client's own warnings (``Couldn't gather 1
-    keys, rescheduling`` when a worker holding results dies) stay unsaid: the run says
-    what happened to the cluster itself (a lost worker is survived; no worker left, or the
-    scheduler gone, is its one-line error)."""
-    log = logging.getLogger("distributed.client")
-    level = log.level
-    log.setLevel(logging.ERROR)
+    """While a run uses its cluster, this process's dask messages below ERROR stay unsaid
+    (``Couldn't gather 1 keys, rescheduling`` when a worker holding results dies, ``Batched
+    Comm Closed`` with a traceback when the scheduler goes): the run says what happened to
+    the cluster itself (a lost worker is survived; no worker left, or the scheduler gone,
+    is its one-line error)."""
+    logs = [logging.getLogger(name) for name in CLIENT_LOGGERS]
+    levels = [log.level for log in logs]
+    for log in logs:
+        log.setLevel(max(log.getEffectiveLevel(), logging.ERROR))
     try:
         yield
     finally:
-        log.setLevel(level)
+        for log, level in zip(logs, levels, strict=True):
+            log.setLevel(level)
 
 
 def fetch_all(futures: list) -> queue.Queue:

@@ -16,8 +16,16 @@ renamed, and the sidecar folder is removed after that. The archive's ``history``
 the time the run was first started, so a resumed run writes the same archive as an
 uninterrupted one.
 
-Schedulers (`urmx.study.clients`): a worker lost mid-run is survived: dask reruns its
-batches, and the record samples are tasks it can recompute, not scattered data.
+Schedulers (`urmx.study.clients`): the client already active in the process is used, a
+small study runs in this process (:func:`compute`); on a cluster, every worker must run
+this process's code (checked when the run connects and on every result), a worker lost
+mid-run is survived (dask reruns its batches, and the record samples are tasks it can
+recompute, not scattered data), and a cluster left with no worker, or whose scheduler
+goes away, stops the run with a `urmx.errors.RunError` instead of a hang.
+
+Outputs: the archive path is resolved and checked (a test file written in its folder, no
+input file of the run) before any work (`urmx.errors.check_output`); a failure to write
+a part or the archive says how many finished batches are kept.
 
 :func:`run_study` reads a study file, resolves its records and writes the archive;
 :func:`run_grid` runs a study built in code on records given in memory, with no archive
@@ -116,14 +124,14 @@ def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
         return
     client, owned = get_client(scheduler)
     pending: dict = {}
-    try:
-        watch = Watch(client, worker_timeout())
-        check_workers(client, watch.timeout)
-        with quiet_client():
+    with quiet_client():
+        try:
+            watch = Watch(client, worker_timeout())
+            check_workers(client, watch.timeout)
             _submit(client, tasks, records, rec_ids, runner, pending)
             _gather(pending, on_result, watch)
-    finally:
-        release(client, owned, [f for f, _ in pending.values()])
+        finally:
+            release(client, owned, [f for f, _ in pending.values()])
 
 
 def _here(tasks: list, records: dict, rec_ids: list[str], on_result: Callable,
@@ -346,12 +354,18 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         A loaded study, a study file, or the name of a catalog study.
     out : str or path, optional
         netCDF archive to write. Finished batches are kept in ``<out>.parts/`` until the
-        archive is written, so an interrupted run resumes where it stopped. Checked before
-        any work (a folder, or a place that cannot be written, is refused); a second run
-        on the same archive while one is running stops with a `urmx.errors.RunError`.
+        archive is written, so an interrupted run resumes where it stopped. Resolved
+        (symbolic links, ``..``) and checked before any work: a folder, a place where a
+        test file cannot be written (no permission, a full disk), a name that is not UTF-8,
+        or an input of the run (the study file, a record's file, the records manifest) is
+        refused; a second run on the same archive while one is running stops with a
+        `urmx.errors.RunError`.
     scheduler : None, "serial", "threads", "processes", address or distributed.Client
-        Where batches run (`urmx.study.clients`). Default: local worker processes, one per
-        core (a study of one batch runs in this process).
+        Where batches run (`urmx.study.clients`). Default: the ``distributed.Client``
+        already active in this process, else this process for a small study (estimated
+        under ``urmx.serial-below`` seconds, :func:`compute`), else local worker
+        processes, one per core. A closed or asynchronous Client is an
+        `urmx.errors.InputError`.
     progress : bool
         Show progress on stderr (a bar with rate and ETA on a terminal, plain lines in a
         log file), counted in the kind's unit.
@@ -376,8 +390,10 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     urmx.UrmxError
         Bad arguments or study file (`urmx.errors.InputError`,
         `urmx.catalog.CatalogError`), an archive that cannot be written
-        (`urmx.errors.OutputError`), another run on the same archive, an unreachable
-        scheduler or a cluster that lost a batch for good (`urmx.errors.RunError`).
+        (`urmx.errors.OutputError`, also for a full disk, saying what is kept), another
+        run on the same archive, an unreachable scheduler, a cluster that lost a batch for
+        good, a worker that runs other code, no worker left for ``urmx.worker-timeout``
+        seconds or the scheduler gone (`urmx.errors.RunError`).
     """
     _check_batch_size(batch_size)
     check_scheduler(scheduler)

@@ -306,6 +306,10 @@ def test_a_small_study_runs_in_this_process(fake_records, make_study, monkeypatc
     with dask.config.set({"urmx.serial-below": "soon"}), \
             pytest.raises(InputError, match="urmx.serial-below='soon'"):
         st.run_study(study, kernel=counting, batch_size=2, progress=False)
+    with dask.config.set({"urmx.worker-timeout": 0}), \
+            pytest.raises(InputError, match=r"urmx.worker-timeout=0 .* must be a number of "
+                          r"seconds > 0"):
+        clients.worker_timeout()
 
 
 def test_progress_in_a_notebook_uses_tqdm_auto(monkeypatch):

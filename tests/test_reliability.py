@@ -25,6 +25,7 @@ import pytest
 import xarray as xr
 
 import urmx
+import urmx.netcdf
 import urmx.records
 from urmx import analysis as A
 from urmx import study as st
@@ -901,12 +902,14 @@ def test_a_full_disk_at_the_final_write_keeps_the_parts(fake_records, gaps, smal
 
     with monkeypatch.context() as patch, pytest.raises(OutputError) as err:
         patch.setattr(st.PartStore, "save", save)
-        if way == "patched":
+        if way == "patched":  # netCDF4's error, on a disk that says it is full
             patch.setattr(xr.Dataset, "to_netcdf", to_netcdf)
+            patch.setattr(urmx.netcdf, "disk_full", lambda folder, below=1e6: True)
         _run(gaps, out=out)
     message = str(err.value)
     assert "\n" not in message
     assert message.startswith(f"cannot write netCDF file {str(out)!r}: "), message
+    assert "MB free on its disk: the disk is full); " in message  # whatever netCDF says
     if way == "patched":
         assert "NetCDF: HDF error (" in message
     assert message.endswith(f"; 6 finished batches kept in {str(parts)!r}: free space on its "

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import OutputError, writing
+from .errors import OutputError
 
 if TYPE_CHECKING:  # xarray is not imported here: the fill value is read on workers too
     import xarray as xr
@@ -69,14 +69,15 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        with writing(path, "netCDF file"):  # a full disk, a folder removed meanwhile
-            path.parent.mkdir(parents=True, exist_ok=True)
-            try:
-                ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
-            except RuntimeError as exc:  # netCDF4 reports HDF5's failures so
-                raise OutputError(f"cannot write netCDF file {str(path)!r}: {exc} "
-                                  f"({_free(path.parent)})") from exc
-            os.replace(tmp, path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
+        os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:  # netCDF4 reports HDF5's failures as
+        # RuntimeError ("NetCDF: HDF error"), and a full disk as often as not as EACCES:
+        # the space left is said with the reason
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise OutputError(f"cannot write netCDF file {str(path)!r}: {reason} "
+                          f"({_free(path.parent)})") from exc
     finally:
         with contextlib.suppress(OSError):
             tmp.unlink()
@@ -89,5 +90,14 @@ def _free(folder: Path) -> str:
         free = shutil.disk_usage(folder).free
     except OSError:
         return "space left unknown"
-    return f"{free / 1e6:.1f} MB free on its disk" + (": the disk is full" if free < 1e6
+    return f"{free / 1e6:.1f} MB free on its disk" + (": the disk is full" if disk_full(folder)
                                                        else "")
+
+
+def disk_full(folder: str | os.PathLike, below: float = 1e6) -> bool:
+    """Whether the disk of `folder` has less than `below` bytes free (False when it cannot
+    be asked)."""
+    try:
+        return shutil.disk_usage(folder).free < below
+    except OSError:
+        return False

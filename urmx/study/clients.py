@@ -207,23 +207,26 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
 
 # ---- settings -----------------------------------------------------------------------------
 
-#: the settings of study runs in dask's configuration (``urmx.<name>``), with defaults
-SETTINGS = {"worker-timeout": 60.0, "serial-below": 10.0}
+#: the settings of study runs in dask's configuration (``urmx.<name>``): their defaults
+#: and whether 0 is allowed
+SETTINGS = {"worker-timeout": (60.0, False), "serial-below": (10.0, True)}
 
 
 def setting(name: str) -> float:
     """A study-run setting from dask's configuration ``urmx.<name>`` (:data:`SETTINGS`
-    holds the defaults), checked: a number of seconds >= 0."""
+    holds the defaults), checked: a finite number of seconds, > 0 (>= 0 where 0 is
+    allowed)."""
     import dask.config
 
-    value = dask.config.get(f"urmx.{name}", SETTINGS[name])
+    default, zero = SETTINGS[name]
+    value = dask.config.get(f"urmx.{name}", default)
     try:
         number = float(value)
     except (TypeError, ValueError):
         number = math.nan
-    if not (number >= 0.0 and math.isfinite(number)):
+    if not (math.isfinite(number) and (number >= 0.0 if zero else number > 0.0)):
         raise InputError(f"urmx.{name}={value!r} (dask config) must be a number of seconds "
-                         ">= 0")
+                         + (">= 0" if zero else "> 0"))
     return number
 
 
@@ -295,6 +298,8 @@ def check_workers(client: Any, timeout: float) -> int:
     except OSError as exc:
         raise RunError(f"the dask scheduler {address} went away: {exc}") from None
     for worker, theirs in sorted(answers.items()):
+        if isinstance(theirs, OSError):  # a worker gone meanwhile runs nothing
+            continue
         if isinstance(theirs, BaseException):
             theirs = {"urmx": f"unknown ({type(theirs).__name__}: {theirs})"}
         if differs(theirs):
@@ -347,8 +352,8 @@ class Watch:
         if self.client.status != "running":
             raise self.gone()
         try:
-            workers = self.client.scheduler_info(n_workers=0)["n_workers"]
-        except (OSError, TimeoutError, KeyError):
+            workers = _worker_count(self.client)
+        except (OSError, TimeoutError):
             raise self.gone() from None
         if workers:
             self.alone_since = None
@@ -403,6 +408,15 @@ def fetch_all(futures: list) -> queue.Queue:
         for future in futures:
             loop.add_callback(fetch, future)
     return arrived
+
+
+def _worker_count(client: Any) -> int:
+    """The number of workers `client`'s scheduler has (asked now)."""
+    try:
+        info = client.scheduler_info(n_workers=0)  # the count without each worker's details
+    except TypeError:  # distributed before 2025: no n_workers argument
+        info = client.scheduler_info()
+    return int(info.get("n_workers", len(info.get("workers", {}))))
 
 
 def release(client: Any, owned: bool, pending: list) -> None:

@@ -435,9 +435,16 @@ def _write_archive(ds: xr.Dataset, out: Path, parts: Path) -> None:
 
 
 def _kept(exc: OutputError, parts: Path, then: str) -> OutputError:
-    """`exc` with how many finished batches `parts` keeps and how to go on."""
+    """`exc` with how many finished batches `parts` keeps and how to go on (free space
+    when the disk is full, else fix the cause)."""
+    import errno
+
+    from ..netcdf import disk_full
+
     n = PartStore(parts, ()).count()
     if not n:
         return OutputError(f"{exc}; no finished batch is kept")
+    full = getattr(exc.__cause__, "errno", None) == errno.ENOSPC or disk_full(parts)
     return OutputError(f"{exc}; {n} finished batch{'es' if n > 1 else ''} kept in "
-                       f"{str(parts)!r}: free space on its disk {then}")
+                       f"{str(parts)!r}: {'free space on its disk' if full else 'fix that'} "
+                       f"{then}")

@@ -377,3 +377,13 @@ def test_the_version_outside_a_checkout_is_the_package_version(tmp_path, monkeyp
         assert attrs["urmx_git_commit"] == "none" and attrs["urmx_git_dirty"] == -1
     finally:
         urmx.provenance.git_commit.cache_clear()
+
+
+def test_version_option_says_which_code_runs(capsys):
+    from urmx.cli import main
+
+    with pytest.raises(SystemExit) as done:
+        main(["--version"])
+    assert done.value.code == 0
+    assert capsys.readouterr().out == f"urmx {urmx.provenance.code_version()}\n"
+    assert urmx.provenance.code_version().startswith(f"{urmx.__version__}+g")  # a checkout

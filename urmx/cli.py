@@ -25,13 +25,26 @@ from pathlib import Path
 COMMANDS = ("simulate", "records", "study", "report", "bench", "fragility")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+class _Version(argparse.Action):
+    """``--version``: the code that runs (`urmx.provenance.code_version`: the version with
+    the git commit in a checkout), found only when asked."""
 
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kw):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kw)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .provenance import code_version
+
+        print(f"urmx {code_version()}")
+        parser.exit()
+
+
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="urmx",
         description="Rocking of cracked URM walls between flexible diaphragms.")
-    parser.add_argument("--version", action="version", version=f"urmx {__version__}")
+    parser.add_argument("--version", action=_Version,
+                        help="show the version (with the git commit in a checkout) and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"urmx.commands.{name}").register(sub)

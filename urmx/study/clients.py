@@ -410,12 +410,14 @@ def fetch_all(futures: list) -> queue.Queue:
     return arrived
 
 
-def _worker_count(client: Any) -> int:
-    """The number of workers `client`'s scheduler has (asked now)."""
+def _worker_count(client: Any, timeout: float = 10.0) -> int:
+    """The number of workers `client`'s scheduler has, asked now (an `OSError` or
+    `TimeoutError` when it cannot answer within `timeout` seconds: the client's
+    ``scheduler_info`` would return its last answer instead)."""
     try:
-        info = client.scheduler_info(n_workers=0)  # the count without each worker's details
+        info = client.sync(client.scheduler.identity, n_workers=0, callback_timeout=timeout)
     except TypeError:  # distributed before 2025: no n_workers argument
-        info = client.scheduler_info()
+        info = client.sync(client.scheduler.identity, callback_timeout=timeout)
     return int(info.get("n_workers", len(info.get("workers", {}))))
 
 

@@ -221,6 +221,9 @@ def _take(future: Any, outcome: Any, batch: Batch, on_result: Callable[[Batch, d
         if getattr(outcome, "reason", "") == "scheduler-connection-lost":
             raise watch.gone()
         watch.check(now=True)  # the scheduler gone says so
+        if isinstance(outcome, OSError):
+            raise RunError(f"the result of batch {batch.key} could not be fetched from the "
+                           f"cluster: {outcome}") from None
         raise RunError(f"dask cancelled batch {batch.key} (the cluster lost it)")
     if isinstance(outcome, BaseException):
         raise outcome  # a bug in the kind: its own traceback

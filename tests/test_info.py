@@ -12,10 +12,11 @@ import pytest
 import xarray as xr
 
 import urmx
-from urmx import fragility_report, generic_report
+from urmx import fragility_report, generic_report, jitcache
 from urmx.cli import main
 from urmx.markdown import number
 from urmx.model import PAPER_G
+from urmx.provenance import code_version
 from urmx.study.summary import diff, format_info, info
 
 GRID = """\
@@ -81,7 +82,8 @@ def test_info_of_a_grid_archive(grid, capsys):
                               enumerate(("ok", "collapsed", "event-limit", "not-run"))}
     assert found["cells"]["ok"] + found["cells"]["collapsed"] == 6
     assert found["file_size"] > 10_000
-    assert found["attrs"]["urmx_version"] == urmx.__version__
+    assert found["attrs"]["urmx_version"] == code_version()
+    assert found["attrs"]["kernel_source_hash"] == jitcache.SOURCE_HASH
     assert 'records = ["elcentro", "bigbear"]' in found["attrs"]["study"]
     assert found["items"]["wall"]["slenderness"] == pytest.approx([12.0, 20.0])
     assert found["items"]["record"]["record"] == ["elcentro", "bigbear"]
@@ -94,7 +96,7 @@ def test_info_of_a_grid_archive(grid, capsys):
     assert "dimensions: wall 2, diaphragm 1, record 2, cor 2" in text
     assert (f"cells: 8 (ok {found['cells']['ok']}, collapsed {found['cells']['collapsed']}, "
             "event-limit 0, not-run 2)") in text
-    assert f"urmx_version: {urmx.__version__}" in text and "    | [study.pairs]" in text
+    assert f"urmx_version: {code_version()}" in text and "    | [study.pairs]" in text
     assert "history: " in text and "urmx run tiny.toml --out tiny.nc" in text
     assert text.strip() == format_info(found)
     assert main(["info", grid, "--json"]) == 0

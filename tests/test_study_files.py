@@ -152,6 +152,19 @@ def test_the_record_digest_follows_the_file(own_study):
     assert after.sha256 != before.sha256 and after.digest != before.digest
 
 
+def test_an_own_record_file_is_never_the_output(own_study):
+    """`--out` naming a record file the study file declares (``[records.<id>] file``) is
+    refused before any work, and the file is left as it was."""
+    from urmx.errors import OutputError
+    from urmx.study import run_study
+
+    at2 = own_study.parent / "data" / "RSN763_LOMAP_GIL067.AT2"
+    before = at2.read_bytes()
+    with pytest.raises(OutputError, match="is the file of record 'gilroy'"):
+        run_study(own_study, out=at2, scheduler="serial", progress=False)
+    assert at2.read_bytes() == before
+
+
 def test_a_folder_of_records_is_one_id_per_file(tmp_path, make_study):
     suite = tmp_path / "data" / "suite"
     suite.mkdir(parents=True)

@@ -49,7 +49,29 @@ def study_options(p) -> None:
     p.add_argument("--records", default=None, help="records folder (default $URMX_RECORDS)")
     p.add_argument("--batch-size", type=_batch_size, default=16,
                    help="analyses per batch, >= 1 (default 16)")
+    p.add_argument("--worker-timeout", type=_seconds, default=None, metavar="SECONDS",
+                   help="on a cluster, stop the run when no worker has been left for this "
+                        "long (default 60; dask config urmx.worker-timeout)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a positive number of seconds")
+    return value
+
+
+def apply_settings(args) -> None:
+    """Put the run settings given on the command line (``--worker-timeout``) into dask's
+    configuration, where the study engine reads them (`urmx.study.clients.setting`)."""
+    if getattr(args, "worker_timeout", None) is not None:
+        import dask.config
+
+        dask.config.set({"urmx.worker-timeout": args.worker_timeout})
 
 
 def command_line() -> str:
@@ -95,6 +117,7 @@ def run_loaded(args, study) -> int:
     as ``urmx run`` does (its aliases call this too)."""
     from ..study import run_study
 
+    apply_settings(args)
     run_resumable(args, Path(args.out), lambda: run_study(
         study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
         batch_size=args.batch_size, records_dir=args.records, command=command_line()))
@@ -112,6 +135,7 @@ def _paper(args) -> int:
     out = check_output(args.out, "--out", folder=True)
     check_output(args.report, "--report", folder=True)
     check_scheduler(args.scheduler)
+    apply_settings(args)
     records_dir(args.records)  # a missing records folder is said before a cluster starts
     start = time.perf_counter()
     archives = []

@@ -76,21 +76,24 @@ def cell_array(shape: tuple[int, ...], batches: list, results: dict, name: str,
     return out
 
 
-def global_attrs(study: Any, started: str, command: str | None) -> dict[str, str]:
-    """Global attributes of a study archive (title, CF convention, ``history`` with the
-    time `started` and the `command`, the urmx version, the study file's text); shared by
-    every study kind."""
+def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any]:
+    """Global attributes of a study archive, shared by every study kind: title, CF
+    convention, ``history`` (the time `started`, the urmx version, the `command`), the study
+    (``study_name``, ``study``: the study file's text) and how it was made
+    (`urmx.provenance.attrs`: ``urmx_version`` with the git commit, ``urmx_git_commit``,
+    ``urmx_git_dirty``, ``kernel_source_hash`` and the Python and library versions)."""
     from .. import __version__
+    from ..provenance import attrs
 
     cmd = command or f"urmx.run_study({study.name!r})"
     return {
         "title": study.title or study.name,
         "Conventions": "CF-1.8",
         "history": f"{started} urmx {__version__}: {cmd}",
-        "urmx_version": __version__,
         "study_name": study.name,
         "study": study.text,
         "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
+        **attrs(),
     }
 
 

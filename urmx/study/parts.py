@@ -76,9 +76,13 @@ class PartStore:
         """Save one batch's arrays as ``<key>.npz`` (written under a temporary name and
         renamed); the key is stored inside too, so a copied or renamed part is recognised."""
         tmp = self.folder / f".{key}.{os.getpid()}.tmp.npz"
-        with writing(self.folder, "part file in"):
-            np.savez(tmp, **result, batch_key=np.array(key))
-            os.replace(tmp, self.folder / f"{key}.npz")
+        try:
+            with writing(self.folder, "part file in"):
+                np.savez(tmp, **result, batch_key=np.array(key))
+                os.replace(tmp, self.folder / f"{key}.npz")
+        finally:  # a full disk leaves no temporary file behind
+            if tmp.exists():
+                tmp.unlink()
 
     def load(self, key: str) -> dict[str, np.ndarray] | None:
         """The saved batch `key`, or None when there is none or it is damaged (truncated by

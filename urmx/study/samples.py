@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..config import project_root
+from ..config import data_dir
 from ..errors import MissingFileError, UrmxError
 from ..records.record import Record
 
@@ -96,13 +96,14 @@ def _own(study, o, in_manifest: bool) -> Record:
 
 
 def _manifest_label(path) -> str:
-    """``manifest <file>`` of a manifest entry's file: relative to the checkout when it
-    lies in it (the same on every machine), else as it is."""
+    """``manifest <file>`` of a manifest entry's file: urmx's own manifest as
+    ``records/manifest.toml`` (the same on every machine, from a checkout or a wheel), any
+    other as it is."""
     if not path:
         return ""
     p = Path(path)
     try:
-        p = p.resolve().relative_to(project_root().resolve())
+        p = p.resolve().relative_to(data_dir("records").parent.resolve())
     except (OSError, ValueError):
         pass
     return f"manifest {p.as_posix()}"

@@ -17,7 +17,7 @@ import os
 import sys
 from pathlib import Path
 
-COMMANDS = ("simulate", "records", "study", "report", "bench", "fragility")
+COMMANDS = ("simulate", "records", "study", "report", "bench", "fragility", "risk")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -147,11 +147,12 @@ def _monotone(x: np.ndarray, rows: list, what: str, rising: bool, where: str) ->
     step = np.diff(x) if rising else -np.diff(x)
     if np.any(~np.isfinite(x)) or np.any(x <= 0):
         k = int(np.argmax(~np.isfinite(x) | (x <= 0)))
-        raise InputError(f"{where}:{rows[k][0]}: {what} {x[k]!r} must be positive and finite")
+        raise InputError(f"{where}:{rows[k][0]}: {what} {float(x[k])!r} must be positive and "
+                         "finite")
     if np.any(step <= 0):
         k = int(np.argmax(step <= 0)) + 1
         raise InputError(f"{where}:{rows[k][0]}: {what} must {'rise' if rising else 'fall'} "
-                         f"from row to row; got {x[k - 1]!r} then {x[k]!r}")
+                         f"from row to row; got {float(x[k - 1])!r} then {float(x[k])!r}")
 
 
 def read_hazard(path: str | os.PathLike) -> HazardCurve:
@@ -302,10 +303,10 @@ def read_spectrum(path: str | os.PathLike) -> DesignSpectrum:
     if np.any(data[:, 0] < 0) or np.any(np.diff(data[:, 0]) <= 0):
         k = int(np.argmax(np.r_[data[0, 0] < 0, np.diff(data[:, 0]) <= 0]))
         raise InputError(f"{path}:{rows[k][0]}: periods must be >= 0 and rise from row to "
-                         f"row; got {data[k, 0]!r}")
+                         f"row; got {float(data[k, 0])!r}")
     if np.any(~np.isfinite(data[:, 1])) or np.any(data[:, 1] <= 0):
         k = int(np.argmax(~np.isfinite(data[:, 1]) | (data[:, 1] <= 0)))
-        raise InputError(f"{path}:{rows[k][0]}: sa {data[k, 1]!r} must be positive")
+        raise InputError(f"{path}:{rows[k][0]}: sa {float(data[k, 1])!r} must be positive")
     return DesignSpectrum(data[:, 0], data[:, 1] * factor, str(path))
 
 

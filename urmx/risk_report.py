@@ -83,9 +83,13 @@ def measure_findings(m: dict | None) -> list[str]:
     wins = int((m["eff"].best == best).sum())
     n = m["eff"].diaphragm.size
     share = (overall[best] / others[-1]) ** 2
+    between = m["alt"].get(next(iter(FA.SA_AVG_RANGES)))
+    alone = "" if between is None or best != "sa_avg" else (
+        f" (over the periods between the diaphragm's and the wall's alone, "
+        f"{_fmt(float(between.median()), 2)})")
     return [f"- **Intensity measure.** The median record-to-record dispersion of the collapse "
-            f"capacity over the walls and diaphragms is {_fmt(overall[best], 2)} in `{best}` "
-            f"against {_fmt(others[0], 2)}-{_fmt(others[-1], 2)} in the other measures ("
+            f"capacity over the walls and diaphragms is {_fmt(overall[best], 2)} in `{best}`"
+            f"{alone} against {_fmt(others[0], 2)}-{_fmt(others[-1], 2)} in the other measures ("
             + ", ".join(f"`{k}` {_fmt(v, 2)}" for k, v in overall.items() if k != best)
             + f"); `{best}` is the most efficient on {wins} of {n} diaphragms. For the same "
             f"confidence in a median it needs about {100 * share:.0f} % of the records the "
@@ -281,11 +285,12 @@ def _margin_lines(d: xr.Dataset, r: dict, heading: str) -> list[str]:
     lines = [f"{heading} Margin over the design spectrum", "",
              f"The median collapse capacity in `sa_wall` over the design spectrum's Sa at the "
              f"wall's rocking period ({Path(mg.attrs['spectrum']).name}; below 1: the median "
-             "wall collapses under the design spectrum's intensity at its period):", ""]
+             "wall collapses under the design spectrum's intensity at its period; T_r and "
+             "the design Sa of the group's first diaphragm):", ""]
     for g, labels in FA.supports_groups(d).items():
         rows = [[str(w), f"{float(d.slenderness.sel(wall=w)):.0f}",
-                 f"{float(d.rocking_period.sel(wall=w).isel(diaphragm=0)):.2f}",
-                 _fmt(float(mg.design_sa.sel(wall=w).isel(diaphragm=0)) * f)]
+                 f"{float(d.rocking_period.sel(wall=w, diaphragm=labels[0])):.2f}",
+                 _fmt(float(mg.design_sa.sel(wall=w, diaphragm=labels[0])) * f)]
                 + [_fmt(float(mg.margin.sel(wall=w, diaphragm=lab)), 3) for lab in labels]
                 for w in d.wall.values]
         lines += [f"{GROUPS.get(g, g).capitalize()}:", "",

@@ -25,6 +25,8 @@ from .markdown import table
 from .reporting import save_figure
 
 LEVEL = f"{100 * CONFIDENCE:g} %"
+OLDER = ("_Not available: the archive lacks the scale factor at collapse and the records' "
+         "measures (written by an older urmx); run `urmx ida` again._")
 
 
 def _save(axes, out: Path, name: str) -> str:
@@ -114,9 +116,7 @@ def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
     the dispersion of every cell with its interval."""
     lines = ["## Which intensity measure predicts collapse best?", ""]
     if m is None:
-        return lines + ["_Not available: the archive lacks the scale factor at collapse and "
-                        "the records' measures (written by an older urmx); run `urmx ida` "
-                        "again._", ""]
+        return lines + [OLDER, ""]
     eff = m["eff"]
     lines += [
         "One IDA run gives the capacities in every measure: the scale factor at collapse "
@@ -137,12 +137,57 @@ def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
                   "and diaphragm with other ranges (10 log-spaced periods each; the records' "
                   "spectra computed again):", "", *table(["sa_avg range", "dispersion"],
                                                          rows), "",
-                  "The default range was chosen on this study among these and a few others "
-                  "(it was the lowest on each half of the records, split by record order or "
-                  "alternately); on other walls or records it is a reasoned starting point, "
-                  "not a proven optimum.", ""]
+                  "The default range was chosen while urmx was developed, on this study, "
+                  "among these and a few other ranges (it gave the lowest dispersion on "
+                  "either half of the records, split by record order or alternately); on "
+                  "other walls or records it is a reasoned start, not a proven optimum.", ""]
     lines += _sufficiency(m)
-    return lines + _measure_table(ds, eff)
+    return lines + _recommendation(m) + _measure_table(ds, eff)
+
+
+def _trends(m: dict, im: str) -> tuple[int, int] | None:
+    """Cases with p < 0.05 on magnitude and on distance of measure `im` (None: unknown)."""
+    s = m["suff"]
+    if s is None:
+        return None
+    r = s.sel(measure=im)
+    return int((r.p_magnitude < 0.05).sum()), int((r.p_distance < 0.05).sum())
+
+
+def _recommendation(m: dict) -> list[str]:
+    """Which measure urmx recommends for walls on flexible diaphragms, and why, from the
+    numbers above."""
+    eff = m["eff"]
+    overall = _overall(eff)
+    best = _recommended(m)
+    second = sorted(overall, key=overall.get)[1]
+    wins = [str(d) for d, b in zip(eff.diaphragm.values, eff.best.values, strict=True)
+            if str(b) == best]
+    others = {str(d): str(b) for d, b in zip(eff.diaphragm.values, eff.best.values,
+                                             strict=True) if str(b) != best}
+    text = (f"**Recommendation.** For walls on flexible diaphragms urmx recommends `{best}`: "
+            f"its capacities have the lowest median dispersion ({_fmt(overall[best], 2)}, "
+            f"against {_fmt(overall[second], 2)} for the next, `{second}`) and the lowest "
+            f"on {len(wins)} of {eff.diaphragm.size} diaphragm cases")
+    if others:
+        text += " (elsewhere " + ", ".join(f"`{b}` on {d}" for d, b in others.items()) + ")"
+    text += (f"; the records needed for the same confidence in a median scale with beta "
+             f"squared, so `{best}` needs about "
+             f"{100 * (overall[best] / overall[second]) ** 2:.0f} % of the records "
+             f"`{second}` needs")
+    trends = _trends(m, best)
+    if trends is not None:
+        n = int(np.isfinite(m["suff"].p_magnitude.sel(measure=best)).sum())
+        text += (f", and its residuals trend with magnitude in {trends[0]} and with "
+                 f"distance in {trends[1]} of {n} cases (p < 0.05)")
+    def span(im: str) -> str:
+        t = eff.typical_dispersion.sel(measure=im)
+        lo, hi = str(t.idxmin("diaphragm").values), str(t.idxmax("diaphragm").values)
+        return (f"from {_fmt(float(t.sel(diaphragm=lo)), 2)} on {lo} to "
+                f"{_fmt(float(t.sel(diaphragm=hi)), 2)} on {hi}")
+
+    return [text + f". Over the diaphragms `sa_diaphragm` runs {span('sa_diaphragm')}, "
+            f"`{best}` {span(best)}.", ""]
 
 
 def _sufficiency(m: dict) -> list[str]:
@@ -321,9 +366,7 @@ def risk_section(ds: xr.Dataset, r: dict | None, out: Path) -> list[str]:
     """The "Collapse risk" section of the fragility report."""
     lines = ["## Collapse risk", ""]
     if r is None:
-        return lines + ["_Not available: the archive lacks the scale factor at collapse and "
-                        "the records' measures (written by an older urmx); run `urmx ida` "
-                        "again._", ""]
+        return lines + [OLDER, ""]
     curve = r["curve"]
     lines += [
         f"The fragility of each wall integrated over a hazard curve "

@@ -12,7 +12,7 @@ def register(sub) -> None:
         description="Integrates each wall's collapse fragility (refitted in the hazard "
                     "curve's intensity measure from the scale factors at collapse the archive "
                     "holds) over a hazard curve: the mean annual frequency of collapse with "
-                    "its 90 %% bootstrap interval and the probability of collapse in --years, "
+                    "its 90 % bootstrap interval and the probability of collapse in --years, "
                     "per wall and diaphragm; the change when the diaphragm is stiffened "
                     "(D1 -> D4, single storey and higher storey); with --spectrum, the median "
                     "capacity in sa_wall over the design Sa at the wall's rocking period. "

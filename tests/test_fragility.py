@@ -894,7 +894,7 @@ def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path
     text = path.read_text()
     for name in ("ida_D1.png", "ida_D4-both.png", "fragility_curves.png",
                  "median_vs_slenderness.png", "median_vs_frequency.png", "resonance.png",
-                 "stiffening.png"):
+                 "stiffening.png", "efficiency.png", "collapse_risk.png"):
         assert (tmp_path / "rep" / name).read_bytes()[:4] == b"\x89PNG"
         assert f"]({name})" in text
     assert "falls with h/t on 4 of 4 diaphragms (Spearman rho -1 to -1)" in text
@@ -908,5 +908,10 @@ def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path
     row = re.search(r"\| s16 \| 16 \| ([0-9.]+) \(([0-9.]+)\)", text)
     assert float(row.group(1)) == pytest.approx(med, abs=1.5e-3)
     assert float(row.group(2)) == pytest.approx(math.log(200 / 150) / 2, abs=0.01)
+    # issue 26: the measures and the risk, from the same run (the stand-in kernel collapses
+    # at a PGA threshold: pga is the efficient measure here)
+    assert "## Which intensity measure predicts collapse best?" in text
+    assert "urmx recommends `pga`" in text and "## Collapse risk" in text
+    assert "### Stiffening the diaphragm: D1 -> D4" in text
     with pytest.raises(ValueError, match="not an IDA archive"):
         write_report(xr.Dataset({"x": ("a", [1.0])}), tmp_path / "bad")

@@ -172,12 +172,15 @@ def _lognormal_mle(y: np.ndarray, cen: np.ndarray, w: np.ndarray):
         theta0 = 1.0 / np.sqrt(var0)
     # two distinct uncensored values at least (a spread above rounding)
     distinct = (so > 0) & (var0 > (1e-12 * np.maximum(1.0, np.abs(mu0))) ** 2)
-    theta0 = np.where(distinct, theta0, 1.0)
-    mu0 = np.where(distinct, mu0, 0.0)
-    delta, theta = _newton(_censored_loglik(y, cen, w), mu0 * theta0, theta0)
-    ok = distinct & np.isfinite(theta) & (theta > 0)
-    return (np.where(ok, np.exp(delta / theta), np.nan),
-            np.where(ok, 1.0 / theta, np.nan))
+    median, dispersion = np.full(w.shape[0], np.nan), np.full(w.shape[0], np.nan)
+    if distinct.any():  # rows without a spread have no maximum: not iterated
+        rows = w[distinct]
+        delta, theta = _newton(_censored_loglik(y, cen, rows), mu0[distinct] * theta0[distinct],
+                               theta0[distinct])
+        ok = np.isfinite(theta) & (theta > 0)
+        median[distinct] = np.where(ok, np.exp(delta / theta), np.nan)
+        dispersion[distinct] = np.where(ok, 1.0 / theta, np.nan)
+    return median, dispersion
 
 
 def _interval(values: np.ndarray, confidence: float) -> tuple[float, float]:
@@ -278,7 +281,8 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
     x, cen = _capacities(capacities, censored)
     y = np.log(x)
     obs = y[~cen]
-    if np.unique(obs).size < 2:
+    if obs.size < 2 or np.ptp(obs) <= 1e-12 * max(1.0, float(np.max(np.abs(obs)))):
+        # values that differ by rounding alone are not distinct: beta would be ~1e-16
         raise InputError(f"a lognormal fit needs at least two distinct uncensored capacities "
                          f"(got {obs.size} uncensored of {y.size})")
     med, disp = _lognormal_mle(y, cen, np.ones((1, y.size)))
@@ -339,15 +343,19 @@ def _separated(lx: np.ndarray, n: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 
 def _stripe_mle(lx, n, z, mid, spread):
-    """(median, dispersion) per row of `z` (B, k); NaN where separated or not rising."""
-    sep = _separated(lx, n, z)
-    b = z.shape[0]
-    theta0, delta0 = np.full(b, 1.0 / spread), np.full(b, mid / spread)
-    delta, theta = _newton(_probit_loglik(lx, n, z), delta0, theta0)
-    ok = ~sep & np.isfinite(theta) & (theta > 0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return (np.where(ok, np.exp(delta / theta), np.nan), np.where(ok, 1.0 / theta, np.nan),
-                theta)
+    """(median, dispersion) per row of collapses `z` (B, k); NaN where separated or not
+    rising."""
+    fit = ~_separated(lx, n, z)  # separated rows have no maximum: not iterated
+    median, dispersion = np.full(z.shape[0], np.nan), np.full(z.shape[0], np.nan)
+    if fit.any():
+        b = int(fit.sum())
+        delta, theta = _newton(_probit_loglik(lx, n, z[fit]), np.full(b, mid / spread),
+                               np.full(b, 1.0 / spread))
+        ok = np.isfinite(theta) & (theta > 0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            median[fit] = np.where(ok, np.exp(delta / theta), np.nan)
+            dispersion[fit] = np.where(ok, 1.0 / theta, np.nan)
+    return median, dispersion
 
 
 def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = CONFIDENCE,
@@ -412,7 +420,7 @@ def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = C
     frac = z / n
     mid = lx[np.argmin(np.abs(frac - 0.5))]
     spread = max(float(np.ptp(lx)) / 4.0, 0.05)
-    med, disp, theta = _stripe_mle(lx, n, z[None, :], mid, spread)
+    med, disp = _stripe_mle(lx, n, z[None, :], mid, spread)
     if not np.isfinite(med[0]):
         raise InputError("the collapse fraction does not rise with intensity over these "
                          "stripes: the likelihood has no maximum with a positive dispersion")
@@ -420,7 +428,7 @@ def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = C
     if resamples and n.sum() >= MIN_BOOTSTRAP:
         rng = np.random.default_rng(seed)
         zb = rng.binomial(n, frac, size=(resamples, x.size))
-        bm, bd, _ = _stripe_mle(lx, n, zb, mid, spread)
+        bm, bd = _stripe_mle(lx, n, zb, mid, spread)
         ok = np.isfinite(bm)
         kept = int(ok.sum())
         if kept:

@@ -22,7 +22,8 @@ import sys
 import threading
 from pathlib import Path
 
-COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility")
+COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility",
+            "risk")
 
 
 class _Version(argparse.Action):

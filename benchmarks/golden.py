@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.common import export_commit
+
 RECORDS = ("elcentro", "nahanni", "christchurch", "bigbear")
 SCALES = (0.5, 1.0, 1.5, 2.0)  # times the record's manifest scale factor
 LAWS = ("scale", "contact")
@@ -88,19 +90,6 @@ def _run_tree(tree: Path, spec: Path, recs: Path, out: Path) -> list[dict]:
     return json.loads(out.read_text())
 
 
-def export(commit: str, where: Path) -> Path:
-    """The package source of `commit` written into folder `where` by ``git archive`` (kept
-    if it is there already, with its compiled kernel)."""
-    from urmx.config import project_root
-
-    if not (where / "urmx" / "kernel.py").exists():
-        where.mkdir(parents=True, exist_ok=True)
-        archive = subprocess.run(["git", "archive", commit, "urmx"], cwd=project_root(),
-                                 check=True, capture_output=True).stdout
-        subprocess.run(["tar", "-x", "-C", str(where)], input=archive, check=True)
-    return where
-
-
 def compare(against: str, base: Path | None = None) -> list[tuple[str, list[str]]]:
     """Run every case through the kernel of this checkout and of commit `against` (exported
     into `base`, a temporary folder by default); returns (label, names of the differing
@@ -111,7 +100,7 @@ def compare(against: str, base: Path | None = None) -> list[tuple[str, list[str]
     spec_cases, recs = cases()
     with tempfile.TemporaryDirectory(prefix="urmx-golden-") as tmp:
         tmp = Path(tmp)
-        base = export(against, base or tmp / "base")
+        base = export_commit(against, base or tmp / "base", ("urmx",))
         spec = tmp / "spec.json"
         spec.write_text(json.dumps({"cases": spec_cases, "keys": list(KEYS)}))
         np.savez(tmp / "recs.npz", **recs)

@@ -23,15 +23,17 @@ time. Its solution is an entire function of time, so:
   terms and the roots of event functions, their times, and the states there are found on
   it by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
   The state at an event is the series summed at the event time, not an interpolant.
-* A function at zero (after an event: the joint that has just impacted, a joint released
-  from a hold with gap, rate and acceleration zero, a branch boundary just crossed; it
-  left zero less than 1/16 of a sub-step ago at its present rate) can come back within
-  the sub-step, even twice, which the signs at the sub-step's ends do not show: unless
-  the series proves it stays positive or is concave (:func:`_no_extra_fall`), the series
-  is searched for its first fall (:func:`_first_fall`: samples growing geometrically from
-  the start, then even ones, extrema between samples located exactly). This search runs
-  after the one above and only an earlier fall replaces what that found, so a sub-step
-  without such a fall gives the same bits as before it existed.
+* A function at zero after an event (the joint that has just impacted, a joint released
+  from a hold with gap, rate and acceleration zero, a branch boundary just crossed: its
+  value is below what its rate covers in 1/16 of a sub-step) can come back within the
+  sub-step, even twice, which the signs at the sub-step's ends do not show. On the
+  sub-step after the event (and on the next one too when that was shorter than 1/16 of a
+  sub-step) its series is searched for its first fall (:func:`_first_fall`: samples
+  growing geometrically from the start, then even ones, extrema between samples located
+  exactly), unless the series proves that it rises throughout (:func:`_rising`, after
+  most events) or that it is concave (:func:`_no_extra_fall`). This search runs after the
+  one above and only an earlier fall replaces what that found, so a sub-step without
+  such a fall gives the same bits as before it existed.
 
 The integration loop (:func:`_march`) is one compiled function that never allocates
 (``_nrt=False``: numba's reference counting of every array passed to every helper cost
@@ -390,7 +392,7 @@ def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
     return k
 
 
-@inline
+@inner
 def release_tie(ist, kind, tgt, k_ev, k):
     """True when event k should replace event k_ev due at the same instant: both release
     the same held joint, and k to the side whose family is the current one (its own side:
@@ -1003,7 +1005,7 @@ def _first_fall(cf, m, s_cap):
     s = s_cap * 2.0 ** -(N_GEOM + 4)
     for i in range(N_GEOM + 15):
         s = 2.0 * s if i < N_GEOM else s_cap * (i - N_GEOM + 2) / 16.0
-        p, d, _ = _peval(cf, m, s)
+        p, d = _peval1(cf, m, s)
         if armed:
             if p <= 0.0:
                 return s_prev, s
@@ -1022,6 +1024,59 @@ def _first_fall(cf, m, s_cap):
         s_prev = s
         d_prev = d
     return 0.0, 2.0
+
+
+@inline
+def _rising(zero, rows, sig, kind, e_a, D, m):
+    """The functions at zero (bits of `zero`) left once those are taken out that rise from
+    zero faster than the rest of their series (D, m terms) can pull them back: e(s) >= c0
+    + s (c1 - sum_(j>=2) |c_j|) > 0 on (0, 1] when c0 >= 0. Release functions (their rows
+    include rates) are always left. (It runs after most events: four partial sums, so that
+    the additions do not wait for each other.)"""
+    for k in range(MAX_EV):
+        if (zero >> k) & 1 and e_a[k] >= 0.0 and kind[k] != EV_BASE_RELEASE \
+                and kind[k] != EV_CRACK_RELEASE:
+            r0, r1, r2 = rows[k, 0], rows[k, 1], rows[k, 2]
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            s3 = 0.0
+            for j in range(2, m - 3, 4):
+                s0 += abs(r0 * D[j, 0] + r1 * D[j, 1] + r2 * D[j, 2])
+                s1 += abs(r0 * D[j + 1, 0] + r1 * D[j + 1, 1] + r2 * D[j + 1, 2])
+                s2 += abs(r0 * D[j + 2, 0] + r1 * D[j + 2, 1] + r2 * D[j + 2, 2])
+                s3 += abs(r0 * D[j + 3, 0] + r1 * D[j + 3, 1] + r2 * D[j + 3, 2])
+            for j in range(m - (m - 2) % 4, m):
+                s0 += abs(r0 * D[j, 0] + r1 * D[j, 1] + r2 * D[j, 2])
+            c1 = sig[k] * (r0 * D[1, 0] + r1 * D[1, 1] + r2 * D[1, 2])
+            if c1 > (s0 + s1) + (s2 + s3):
+                zero &= ~(1 << k)
+    return zero
+
+
+@inner
+def _first_falls(rows, vrows, agc, sig, kap, kind, ne, zero, D, m, H, a0, beta, cf, s_ev,
+                 k_ev):
+    """The earliest fall on a sub-step (series D of m terms, length H) of the event
+    functions at zero (bits of `zero`), by :func:`_first_fall` unless
+    :func:`_no_extra_fall` rules it out, if earlier than s_ev (function k_ev, -1 for none)
+    by more than the time tolerance. Returns (s_ev, k_ev)."""
+    tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
+    for k in range(ne):
+        if not (zero >> k) & 1:
+            continue
+        mc = _event_poly(rows, vrows, agc, sig, kap, kind, k, D, m, H, a0, beta, cf)
+        if _no_extra_fall(cf, mc):
+            continue
+        cap = min(s_ev, 1.0)
+        f_lo, f_hi = _first_fall(cf, mc, cap)
+        if f_hi > cap:
+            continue
+        s_root = _newton(cf, mc, f_lo, f_hi, tol, 0.5 * (f_lo + f_hi), 0)[1]
+        if k_ev < 0 or s_root < s_ev - tol:
+            s_ev = s_root
+            k_ev = k
+    return s_ev, k_ev
 
 
 @inner
@@ -1223,15 +1278,13 @@ def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
 
 
 @inline
-def _may_fire(OPN, e_a, ed_a, e_b, ed_b, H):
+def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
     """False when no event function can have an event on the sub-step: none ends at
-    or below zero, no closed contact may open, none dips towards zero, none starts near
-    zero (within what its rate covers in the sub-step: it may have just left zero)."""
+    or below zero, no closed contact may open, none dips towards zero."""
     flag = False
     for k in range(MAX_EV):
         # (a superset: a rate turning upward is flagged whatever the values)
-        flag |= (e_b[k] <= 0.0) | (OPN[k] * e_a[k] > 0.0) | ((ed_a[k] < 0.0) & (ed_b[k] > 0.0)) \
-            | (e_a[k] <= H * max(ed_a[k], 0.0))
+        flag |= (e_b[k] <= 0.0) | (OPN[k] * e_a[k] > 0.0) | ((ed_a[k] < 0.0) & (ed_b[k] > 0.0))
     return flag
 
 
@@ -1366,6 +1419,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     duration = t_end
     done = False
     beta_prev = beta0
+    near = 0  # bit k: event function k may have just left zero (set at events)
     for step in range(nsteps):
         if step < N - 1:
             alpha = ag[step]
@@ -1416,36 +1470,23 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
             # earliest event on [tau, tb]
             s_ev = 2.0
             k_ev = -1
-            zero = 0  # bit k: function k is at zero at the sub-step start
-            back = 0  # bit k: function k left zero and may come back and leave again
-            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b, H) else 0):
+            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b) else 0):
                 opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
                 ea, eb, eda, edb = e_a[k], e_b[k], ed_a[k], ed_b[k]
                 crossing = ea > 0.0 and eb <= 0.0
                 # started on (or just behind) zero moving inward, and ends at or behind
                 # it again: it rose and fell back (after an impact, a merged impact)
                 rebound = ea <= 0.0 and eda > 0.0 and eb <= 0.0
-                # near zero: it left zero less than a sub-step ago at its present rate (or
-                # it sits at or behind zero); at zero: less than 1/16 of a sub-step ago
-                near = not opening and ea <= H * max(eda, 0.0)
-                if near and ea <= (H / 16.0) * max(eda, 0.0):
-                    zero |= 1 << k
                 dip = False
                 if opening:
                     # a tiny threshold (g_open) can be crossed and recrossed within a
                     # sub-step, with zero rate at the start (at rest): scan the series
                     dip = not crossing and ea > 0.0
-                elif not crossing and ea > 0.0 and eb > 0.0 and edb > 0.0 and (
-                        eda < 0.0 or near) and min(ea, eb) - (4.0 / 27.0) * H * (
-                            abs(edb) + abs(eda)) < 0.25 * max(ea, eb):
-                    # towards zero and away again (or, near zero, away, back and away
-                    # again): the Hermite cubic stays above min(ends) - 4/27 (|m0| + |m1|)
+                elif not crossing and ea > 0.0 and eb > 0.0 and eda < 0.0 and edb > 0.0 \
+                        and min(ea, eb) - (4.0 / 27.0) * H * (edb - eda) < 0.25 * max(ea, eb):
+                    # (the Hermite cubic stays above min(ends) - 4/27 (|m0| + |m1|))
                     lo, hi, slo, shi = _hermite_ext(ea, eb, eda * H, edb * H)
-                    if lo < 0.25 * max(ea, eb):
-                        if eda < 0.0:
-                            dip = True
-                        else:
-                            back |= 1 << k
+                    dip = lo < 0.25 * max(ea, eb)
                 if not (crossing or dip or rebound):
                     continue
                 if m_taylor == 0:
@@ -1481,32 +1522,21 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                         ist, kind, tgt, k_ev, k)):
                     s_ev = s_root
                     k_ev = k
-            # a function at zero after an event (an impact, a release) can come back at
-            # once, and an even number of crossings leaves the ends' signs alike: its
-            # series is searched for its first fall before the event found above (MODEL.md
-            # section 4, last detail of holding)
-            # (a second pass, so that the events of the first are found as before)
-            for k in range(ne if zero | back else 0):
-                if not ((zero | back) >> k) & 1:
-                    continue
+            if near:
+                # a function at zero after an event (an impact, a release, a boundary
+                # crossed) can come back at once, even twice, which the ends' signs do not
+                # show: unless it provably rises through this sub-step, its first fall is
+                # searched for (MODEL.md section 4, last detail of holding). A second pass,
+                # so that the events of the first are found as before, and calls, to keep
+                # this loop small.
                 if m_taylor == 0:
                     m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                mc = _event_poly(rows, vrows, agc, sig, kap, kind, k, D, m_taylor, H, a0, beta,
-                                 cf)
-                cap = min(s_ev, 1.0)
-                if (zero >> k) & 1:
-                    if _no_extra_fall(cf, mc):
-                        continue
-                    f_lo, f_hi = _first_fall(cf, mc, cap)
-                else:
-                    f_lo, f_hi = 0.0, _scan(cf, mc, False, False)
-                if f_hi > cap:
-                    continue
-                tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
-                s_root = _newton(cf, mc, f_lo, f_hi, tol, 0.5 * (f_lo + f_hi), 0)[1]
-                if k_ev < 0 or s_root < s_ev - tol:
-                    s_ev = s_root
-                    k_ev = k
+                zero = _rising(near, rows, sig, kind, e_a, D, m_taylor)
+                if zero:
+                    s_ev, k_ev = _first_falls(rows, vrows, agc, sig, kap, kind, ne, zero, D,
+                                              m_taylor, H, a0, beta, cf, s_ev, k_ev)
+                if H >= h_sub / 16.0:
+                    near = 0  # (left zero a sixteenth of a sub-step ago at least)
             s_end = 1.0
             t_end = tb
             if k_ev >= 0:
@@ -1583,6 +1613,14 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 if rel:
                     _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, alpha + beta * tau, beta, e_a,
                                 ed_a)
+                # the functions at zero (MODEL.md section 4): searched for a fall on this
+                # sub-step and the next
+                h_next = dt / nsub[mid]
+                near = 0
+                for k in range(ne):
+                    if kind[k] != EV_BASE_OPEN and kind[k] != EV_CRACK_OPEN \
+                            and e_a[k] <= (h_next / 16.0) * max(ed_a[k], 0.0):
+                        near |= 1 << k
                 # a boundary reached at the same instant and moving outward fires now; a
                 # held joint whose release test is already positive is released now (to
                 # the side of the current family when both sides qualify)

@@ -746,7 +746,7 @@ def test_simulate_and_records_never_write_over_their_inputs(tmp_path, capsys):
 
 
 def _leftovers(*folders: Path) -> list[Path]:
-    """Temporary files (urmx's ``.*.tmp``, ``.*.tmp.npz`` and output probes) in `folders`,
+    """Temporary files (urmx's ``.*.tmp``, ``.*.npz.tmp`` and output probes) in `folders`,
     recursively."""
     return [p for f in folders for p in f.rglob(".*") if ".tmp" in p.name
             or p.name.startswith(".urmx-probe")]
@@ -853,7 +853,7 @@ def test_a_full_disk_while_saving_parts_says_what_is_kept(fake_records, gaps, sm
 
     def savez(file, *args, **kw):  # the 'patched' disk: full at the fourth part
         if len(saved) == 3:
-            Path(file).write_bytes(b"")
+            file.write(b"PK")  # an open temporary file: a few bytes, then the disk is full
             raise _enospc()
         return real_savez(file, *args, **kw)
 
@@ -1050,3 +1050,24 @@ def test_ctrl_c_gives_one_line(tmp_path):
     assert len(lines) == 1, err
     assert lines[0].startswith("urmx run: interrupted; ") and str(parts) in lines[0]
     assert not out.exists() and len(list(parts.glob("*.npz"))) >= 3
+
+
+def test_a_part_being_written_is_never_counted_as_a_part(tmp_path, monkeypatch):
+    """A part is written under a temporary name that no ``*.npz`` glob matches: the
+    interrupt test once saw three parts, of which one was still being written and was
+    deleted by the SIGINT (a count that went down)."""
+    from urmx.study.parts import PartStore
+
+    store = PartStore(tmp_path, ("a",))
+    seen = []
+    real = os.replace
+
+    def spy(src, dst):
+        seen.append((Path(src).name, sorted(p.name for p in tmp_path.glob("*.npz"))))
+        real(src, dst)
+
+    monkeypatch.setattr(os, "replace", spy)
+    store.save("k1", {"a": np.arange(3.0)})
+    assert seen == [(f".k1.{os.getpid()}.npz.tmp", [])]
+    assert store.count() == 1 and sorted(p.name for p in tmp_path.iterdir()) == ["k1.npz"]
+    assert np.array_equal(store.load("k1")["a"], np.arange(3.0))

@@ -75,10 +75,13 @@ class PartStore:
     def save(self, key: str, result: dict[str, np.ndarray]) -> None:
         """Save one batch's arrays as ``<key>.npz`` (written under a temporary name and
         renamed); the key is stored inside too, so a copied or renamed part is recognised."""
-        tmp = self.folder / f".{key}.{os.getpid()}.tmp.npz"
+        # the temporary name does not end in .npz, so no glob for parts ever counts a part
+        # still being written (a SIGINT then deletes it, and the count would go down)
+        tmp = self.folder / f".{key}.{os.getpid()}.npz.tmp"
         try:
             with writing(self.folder, "part file in"):
-                np.savez(tmp, **result, batch_key=np.array(key))
+                with open(tmp, "wb") as fh:
+                    np.savez(fh, **result, batch_key=np.array(key))
                 os.replace(tmp, self.folder / f"{key}.npz")
         finally:  # a full disk leaves no temporary file behind
             if tmp.exists():

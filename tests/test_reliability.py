@@ -1068,6 +1068,6 @@ def test_a_part_being_written_is_never_counted_as_a_part(tmp_path, monkeypatch):
 
     monkeypatch.setattr(os, "replace", spy)
     store.save("k1", {"a": np.arange(3.0)})
-    assert seen == [(".k1.%d.npz.tmp" % os.getpid(), [])]
+    assert seen == [(f".k1.{os.getpid()}.npz.tmp", [])]
     assert store.count() == 1 and sorted(p.name for p in tmp_path.iterdir()) == ["k1.npz"]
     assert np.array_equal(store.load("k1")["a"], np.arange(3.0))

@@ -523,6 +523,8 @@ def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records
     out = tmp_path / "report"
     assert main(["uncertainty-report", str(tmp_path / "rep.nc"), "--out", str(out)]) == 0
     text = (out / "REPORT.md").read_text()
+    if ds.attrs["urmx_git_commit"] != "none":  # a checkout: the code that made it
+        assert f"made at commit `{ds.attrs['urmx_git_commit'][:12]}`" in text
     for name in ("sensitivity.png", "parameters.png", "spread.png", "fragility.png",
                  "impact_law.png"):
         assert (out / name).stat().st_size > 1000 and f"({name})" in text

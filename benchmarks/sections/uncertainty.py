@@ -49,10 +49,12 @@ def _quick_study(tmp: Path) -> Path:
     return path
 
 
-def _cpu() -> float:
-    """User and system CPU seconds of this (worker) process."""
-    r = resource.getrusage(resource.RUSAGE_SELF)
-    return r.ru_utime + r.ru_stime
+def _cpu(client) -> float:
+    """User and system CPU seconds of the client's worker processes (each asked for its
+    own usage: a function of the standard library, which every worker can import, unlike
+    this module)."""
+    usage = client.run(resource.getrusage, resource.RUSAGE_SELF).values()
+    return sum(r[0] + r[1] for r in usage)  # ru_utime + ru_stime
 
 
 def time_study(study, out: Path) -> dict:
@@ -68,12 +70,12 @@ def time_study(study, out: Path) -> dict:
     client.run(warm_up)
     data["startup_seconds"] = time.perf_counter() - t
     try:
-        cpu0 = sum(client.run(_cpu).values())
+        cpu0 = _cpu(client)
         load0, t = _load(), time.perf_counter()
         ds = run_study(study, out=out, scheduler=client, progress=False,
                        command=f"urmx bench uncertainty ({study.name})")
         data["run_seconds"] = time.perf_counter() - t
-        data["worker_cpu_seconds"] = sum(client.run(_cpu).values()) - cpu0
+        data["worker_cpu_seconds"] = _cpu(client) - cpu0
         data["run_load"] = [load0, _load()]
     finally:
         close_client(client)

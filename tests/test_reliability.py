@@ -521,7 +521,7 @@ def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
     parts.mkdir()
     store = st.PartStore(parts, st.BATCH_OUTPUTS)
     for b, t in tasks:
-        store.save(b.key, st.run_batch(t, ACC[study.records[b.record]]))
+        store.save(b.key, st.run_batch(t, ACC[study.records[b.record]]), b.cells)
     (a, _), (b, _), (c, _) = tasks[:3]
     shutil.copy(parts / f"{a.key}.npz", parts / f"{b.key}.npz")  # another batch's part
     damaged = (parts / f"{c.key}.npz").read_bytes()
@@ -555,7 +555,8 @@ def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tm
     parts.mkdir()
     store = st.PartStore(parts, ida.OUTPUTS)
     for b, t in tasks:
-        store.save(b.key, ida.run_batch(t, records[study.records[b.record]].acceleration))
+        store.save(b.key, ida.run_batch(t, records[study.records[b.record]].acceleration),
+                   b.cells)
     with np.load(parts / f"{tasks[0][0].key}.npz") as z:
         assert str(z["batch_key"]) == tasks[0][0].key
         assert set(ida.OUTPUTS) <= set(z.files)

@@ -24,13 +24,14 @@ from . import (
     kernel,
     opensees,
     paper,
+    scale,
     startup,
     statuses,
     work_precision,
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility, statuses, startup, opensees]
+            fragility, statuses, startup, opensees, scale]
 
 #: names on the command line that run several sections
 GROUPS = {

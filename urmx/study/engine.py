@@ -75,8 +75,12 @@ from .sources import Sources, take_over
 if TYPE_CHECKING:
     import xarray as xr
 
-#: batches handed to dask at once (more when the cluster has more than WINDOW / 32 workers)
+#: batches handed to dask at once (more when the cluster has more than WINDOW / 32 workers,
+#: fewer when they hold more than WINDOW_CELLS cells in all)
 WINDOW = 1024
+WINDOW_CELLS = 2 ** 18
+CHUNK_CACHE = 2 ** 21  # bytes of netCDF chunk cache per variable while an archive is written
+MESSAGE_LOG = 16  # batches of messages a local cluster's connections keep (distributed: 1000)
 
 
 @dataclass
@@ -220,23 +224,43 @@ def _windows(batches: Iterator, size: int) -> Iterator[list]:
         yield chunk
 
 
+def _window(client: Any, first: list) -> int:
+    """Batches to hand to dask at once: enough to keep every worker busy (32 each, at least
+    `WINDOW`), few enough that the tasks and results in flight stay small (about
+    `WINDOW_CELLS` cells)."""
+    try:
+        workers = len(client.scheduler_info().get("workers", ()))
+    except Exception:  # noqa: BLE001 - a scheduler that cannot say: the default
+        workers = 0
+    per = max(1, max((b.size for b, _ in first), default=1))
+    return max(32 * workers, 64, min(WINDOW, WINDOW_CELLS // per))
+
+
+def _client(scheduler: Any) -> tuple[Any, bool]:
+    """`get_client`, a cluster it starts keeping short logs of the messages it sent
+    (distributed keeps the last 1000 batches of messages of every connection, the batches'
+    tasks with them: hundreds of MB in the main process over a long study)."""
+    import dask
+    import distributed  # noqa: F401 - its config defaults first, kept when the set ends
+
+    with dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG}):
+        return get_client(scheduler)
+
+
 def _compute_all(batches: Iterator, records: dict, rec_ids: list[str], scheduler: Any,
                  on_result: Callable, runner: Callable) -> None:
-    """Run the batches (`compute`), `WINDOW` at a time on one client; a single batch with
-    no scheduler named runs in this process."""
+    """Run the batches (`compute`): in this process one at a time, or on one client a
+    window at a time (`_window`); a single batch with no scheduler named runs in this
+    process."""
     first = list(itertools.islice(batches, 2))
     batches = itertools.chain(first, batches)
     if scheduler == "serial" or (scheduler is None and len(first) <= 1):
-        for chunk in _windows(batches, WINDOW):
-            compute(chunk, records, rec_ids, "serial", on_result, runner)
+        for batch in batches:
+            compute([batch], records, rec_ids, "serial", on_result, runner)
         return
-    client, owned = get_client(scheduler)
+    client, owned = _client(scheduler)
     try:
-        try:
-            window = max(WINDOW, 32 * len(client.scheduler_info().get("workers", ())))
-        except Exception:  # noqa: BLE001 - a scheduler that cannot say: the default
-            window = WINDOW
-        for chunk in _windows(batches, window):
+        for chunk in _windows(batches, _window(client, first)):
             compute(chunk, records, rec_ids, client, on_result, runner)
     finally:
         if owned:
@@ -567,9 +591,17 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
 
 
 def _write(ds: xr.Dataset, out: Path) -> None:
-    """Write the lazy Dataset of a run, chunk by chunk, in this process (never on a
-    cluster that may be the default dask scheduler: its workers need not see the parts)."""
+    """Write the lazy Dataset of a run, slab by slab, in this process (never on a cluster
+    that may be the default dask scheduler: its workers need not see the parts), with a
+    small chunk cache per variable: each slab is one whole netCDF chunk, written once, so a
+    cache only holds memory (netCDF's default is 64 MiB per variable)."""
     import dask
+    import netCDF4
 
-    with dask.config.set(scheduler="synchronous"):
-        write_netcdf(ds, out)
+    saved = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(CHUNK_CACHE, 61, 1.0)
+    try:
+        with dask.config.set(scheduler="synchronous"):
+            write_netcdf(ds, out)
+    finally:
+        netCDF4.set_chunk_cache(*saved)

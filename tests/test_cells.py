@@ -489,3 +489,85 @@ def test_the_cut_covers_exactly_the_cells_to_run_in_bounded_blocks(grid, seed):
         assert 1 <= batch.size <= size and len(batch.block["record"]) == 1
         seen[cells.flat(list(batch.block.values())).ravel()] += 1
     np.testing.assert_array_equal(seen, (runs & ~done).astype(int))
+
+
+# ---- reuse for the other kinds of cells: IDA capacities and kept time histories -------------
+
+IDA = """\
+[study]
+name = "ida-reuse"
+walls = ["s08", "s18"]
+diaphragms = ["D1", "D5"]
+supports = "top"
+records = {records}
+cor = [0.7, 0.8]
+
+[study.ida]
+im = "pga"
+rtol = 1e-3
+step = 1.5
+max_intensity = 2.0
+"""
+
+
+def test_an_extended_ida_study_computes_only_its_new_capacities(make_study, use_records,
+                                                                tmp_path):
+    from .test_reliability import ACC as ACC3
+    from .test_reliability import SCALE as SCALE3
+    from .test_reliability import ida_kernel
+
+    use_records(ACC3, SCALE3, DT)
+    calls: list = []
+
+    def kernel(*args, **kw):
+        calls.append(1)
+        return ida_kernel(*args, **kw)
+
+    def run(records, out=None):
+        path = make_study(IDA.format(records=records), f"ida-{len(records)}.toml")
+        return st.run_study(path, out=out, kernel=kernel, scheduler="serial",
+                            progress=False, batch_size=3)
+
+    out = tmp_path / "ida.nc"
+    first = run(["quake"], out).load()
+    calls.clear()
+    ds = run(["quake", "shake"], out).load()
+    assert (st.last_run().from_archive, st.last_run().computed) == (8, 8)
+    old = ds.sel(record=["quake"]).isel(intensity_step=slice(0, first.sizes["intensity_step"]))
+    for name in ("collapse_intensity", "censored", "analyses", "instability_ratio",
+                 "intensity", "record_intensity", "predominant_frequency"):
+        assert np.asarray(first[name].values).tobytes() == \
+            np.asarray(old[name].values).tobytes(), name
+    analyses = len(calls)
+    calls.clear()
+    fresh = run(["quake", "shake"])
+    assert len(calls) == analyses + float(first.analyses.sum())  # the reused analyses
+    _same(ds, fresh)
+
+
+HISTORY = """
+[[study.history]]
+wall = "s18"
+diaphragm = "D1"
+record = "rec1"
+cor = 0.8
+"""
+
+
+def test_kept_histories_are_computed_again_rather_than_taken_from_an_archive(
+        make_study, own_records, tmp_path):
+    out = tmp_path / "own.nc"
+    calls: list = []
+    first = _own(make_study)
+    first.write_text(first.read_text() + HISTORY)
+    _run_own(first, out, own_records, calls)
+    extended = _own(make_study, records=("rec1", "rec2", "rec3", "rec4"))
+    extended.write_text(extended.read_text() + HISTORY)
+    calls.clear()
+    ds = _run_own(extended, out, own_records, calls).load()
+    assert len(calls) == 8 + 1  # rec4's cells and the one cell whose history is kept
+    assert (st.last_run().from_archive, st.last_run().computed) == (23, 9)
+    calls.clear()
+    _same(ds, st.run_study(extended, records_dir=own_records, kernel=_counting(calls),
+                           scheduler="serial", progress=False))
+    assert ds.theta_lower.sizes["history"] == 1

@@ -5,8 +5,9 @@ the archive's size, and the expected time of a 10^8-analysis building-stock stud
 cluster of N workers.
 
 The grid: the 9 parametric walls x D1-D5 (single storey) x one synthetic record (5 s at
-0.01 s) x 148 CORs x 150 scale factors = 999,000 analyses, in batches of 256 (3,903
-batches, cut over every dimension). Not part of ``all`` (about 5-10 minutes on 2 shared
+0.01 s) x 148 CORs x 150 scale factors = 999,000 analyses, ``batch_size`` 256: 6,660
+batches of 150 analyses (the 150 scales whole, one COR each: the cut takes the innermost
+dimensions whole while they fit). Not part of ``all`` (about 8-10 minutes on 2 shared
 cores); ``urmx bench scale`` (``--quick``: 4,500 analyses, to check the machinery).
 """
 
@@ -258,7 +259,8 @@ def render(d: dict, figures_dir: str = "performance") -> list[str]:
          f"Grid: {d['grid']} = **{d['cells']:,} analyses**; record: {d['record']}. Run as a "
          "user runs a study: `urmx.run_study(study.toml, out=FILE.nc, records_dir=...)` on "
          f"a LocalCluster of {d['workers']} worker processes (started and warmed before the "
-         f"clock), batches of {d['batch_size']} analyses cut over every dimension, each "
+         f"clock), `batch_size={d['batch_size']}`: {d['batches']:,} batches of "
+         f"{d['analyses'] / d['batches']:.0f} analyses cut over every dimension, each "
          "saved as a part at once; the archive is then written from the parts, slab by "
          "slab. Load average (1, 5, 15 min) before and after: "
          f"{', '.join(map(str, d['load'][0]))} / {', '.join(map(str, d['load'][1]))} "
@@ -277,7 +279,7 @@ def render(d: dict, figures_dir: str = "performance") -> list[str]:
         ["main process RSS, highest while writing", f"{m['write_max']:.0f} MB"],
         *[[f"{k} RSS, highest", f"{v:.0f} MB"] for k, v in m["children_max"].items()]])
     L += ["", f"The main process (the client, the dask scheduler of the local cluster and the "
-          f"archive's writer) stays flat: {m['compute_growth']:+.0f} MB from a tenth of the "
+          f"archive's writer): {m['compute_growth']:+.0f} MB from a tenth of the "
           f"computation to its end (bound {d['flat_bound_mb']:.0f} MB: "
           f"{verdict(d['met_flat'])}); writing the archive adds "
           f"{m['write_max'] - m['compute_max']:+.0f} MB at most (bound "
@@ -287,6 +289,8 @@ def render(d: dict, figures_dir: str = "performance") -> list[str]:
           "with a 2 MiB netCDF chunk cache per variable.", ""]
     if d.get("figure"):
         L += [f"![RSS of every process over the run]({figures_dir}/{d['figure']})", ""]
+    per_batch = d["analyses"] / d["batches"]
+    tasks = d["rate"] / d["workers"] / per_batch
     L += ["**A building-stock study of 10^8 analyses** on a cluster of N workers, from this "
           f"run: each worker computes {d['rate'] / d['workers']:.0f} analyses/s (this run's "
           "rate over its 2 workers), and the main process writes the archive at this run's "
@@ -294,8 +298,10 @@ def render(d: dict, figures_dir: str = "performance") -> list[str]:
           "per analysis (a 5 s record at 0.01 s; the cost grows about in proportion to the "
           "record's samples, see *Cost growth*, so a 30 s record costs about 6 times as "
           "much), workers as fast as these cores and never idle (batches of "
-          f"{d['batch_size']} keep the dask scheduler at a few hundred tasks per second, far "
-          "below its limit), the archive written after the computation by one process, "
+          f"{per_batch:.0f} analyses mean {tasks:.1f} tasks per second and worker, "
+          f"{tasks * CLUSTERS[-1]:,.0f} per second on {CLUSTERS[-1]:,} workers: one dask "
+          "scheduler handles a few thousand, so a cluster that large takes batches of "
+          "thousands of analyses), the archive written after the computation by one process, "
           "and the limits raised (`--max-cells 1e8 --max-gb 20`: about "
           f"{BIG * d['bytes_per_cell'] / 1e9:.1f} GB compressed, 13.3 GB uncompressed; the "
           "main process holds 8 bytes per cell, 0.8 GB).", ""]

@@ -77,7 +77,7 @@ if TYPE_CHECKING:
 
 #: batches handed to dask at once (more when the cluster has more than WINDOW / 32 workers,
 #: fewer when they hold more than WINDOW_CELLS cells in all)
-WINDOW = 1024
+WINDOW = 256
 WINDOW_CELLS = 2 ** 18
 CHUNK_CACHE = 2 ** 21  # bytes of netCDF chunk cache per variable while an archive is written
 MESSAGE_LOG = 16  # batches of messages a local cluster's connections keep (distributed: 1000)

@@ -14,9 +14,11 @@ Pickled objects are never loaded. Parts written by urmx before cells were keyed 
 
 from __future__ import annotations
 
+import ast
 import datetime as _dt
 import hashlib
 import os
+import zipfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -98,8 +100,6 @@ class PartStore:
 
     def legacy(self) -> int:
         """Part files written by urmx before cells were keyed (no ``cell_key``)."""
-        import zipfile
-
         n = 0
         for path in self.files():
             try:
@@ -123,8 +123,7 @@ def load_part(path: Path, key: str | None, outputs: tuple[str, ...]
     its cells' keys (or their shapes disagree), or holds another batch than `key`
     (`PartStore.load`)."""
     try:
-        with np.load(path, allow_pickle=False) as z:
-            out = {k: z[k] for k in z.files}
+        out = read_npz(path)
     except Exception:  # noqa: BLE001 - any unreadable file is recomputed, never trusted
         return None
     stored = out.pop("batch_key", None)
@@ -136,6 +135,39 @@ def load_part(path: Path, key: str | None, outputs: tuple[str, ...]
     if any(out[name].shape[:cells.ndim] != cells.shape for name in outputs):
         return None
     return out
+
+
+_HEADERS: dict[bytes, tuple] = {}  # .npy headers already parsed -> (dtype, shape, order)
+
+
+def _array(raw: bytes) -> np.ndarray:
+    """One ``.npy`` member's array (read-only, over `raw`); pickled objects are refused."""
+    if raw[:6] != b"\x93NUMPY" or raw[6] not in (1, 2, 3):
+        raise ValueError("not a .npy array")
+    start = 10 if raw[6] == 1 else 12
+    end = start + int.from_bytes(raw[8:start], "little")
+    header = raw[start:end]
+    meta = _HEADERS.get(header)
+    if meta is None:
+        d = ast.literal_eval(header.decode("latin1"))
+        dtype = np.lib.format.descr_to_dtype(d["descr"])
+        if dtype.hasobject:
+            raise ValueError("an array of Python objects")
+        if len(_HEADERS) > 4096:
+            _HEADERS.clear()
+        meta = _HEADERS[header] = (dtype, tuple(d["shape"]), "F" if d["fortran_order"] else "C")
+    dtype, shape, order = meta
+    count = int(np.prod(shape, dtype=np.int64))
+    return np.frombuffer(raw, dtype=dtype, count=count, offset=end).reshape(shape, order=order)
+
+
+def read_npz(path: Path) -> dict[str, np.ndarray]:
+    """The arrays of an ``.npz`` file written by `numpy.savez`, as `numpy.load` gives them
+    (each member's checksum checked; no pickles), parsing each distinct ``.npy`` header
+    once: a part's twenty small arrays read about ten times faster."""
+    with zipfile.ZipFile(path) as z:
+        return {name[:-4]: _array(z.read(name)) for name in z.namelist()
+                if name.endswith(".npy")}
 
 
 class Lock:

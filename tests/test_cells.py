@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import io
 import os
-import signal
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -35,6 +33,7 @@ from urmx.study.cells import Cells
 from urmx.study.dataset import coord, grid_coords
 from urmx.study.limits import SizeError
 
+from .fixtures.signals import killed_after_parts
 from .test_study import fake_kernel
 
 # ---- a vectorised stand-in kind over cor x scale ------------------------------------------
@@ -132,21 +131,10 @@ def test_a_million_cells_resume_after_a_kill_with_another_batch_size(million, tm
     """SIGKILL of the process running the 10^6-cell study (250 batches of 4000) once 20
     batches are saved; the resumed run, with batches of 10,000 cells, computes exactly the
     cells the killed run did not save, and its archive equals an uninterrupted run's."""
-    root = Path(__file__).resolve().parent.parent
     out = tmp_path / "million.nc"
     parts = tmp_path / "million.nc.parts"
-    env = dict(os.environ, **{SLEEP: "0.1"})
-    proc = subprocess.Popen([sys.executable, "-c", RUN, str(million), str(out), "4000"],
-                            cwd=root, env=env, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None \
-            and len(list(parts.glob("*.npz"))) < 20:
-        time.sleep(0.02)
-    assert proc.poll() is None, proc.stderr.read().decode()
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    proc.stderr.close()
-    kept = len(list(parts.glob("*.npz")))
+    kept = killed_after_parts(["-c", RUN, str(million), str(out), "4000"], parts, 20,
+                              dict(os.environ, **{SLEEP: "0.1"}))
     assert 20 <= kept < 250 and not out.exists()
     err = io.StringIO()
     saved, sys.stderr = sys.stderr, err

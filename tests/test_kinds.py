@@ -10,11 +10,9 @@ import io
 import json
 import os
 import pickle
-import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +23,8 @@ from urmx.catalog import CatalogError, load_study
 from urmx.errors import RunError
 from urmx.study import Lock, kinds
 from urmx.study.dataset import grid_coords
+
+from .fixtures.signals import killed_after_parts
 
 # ---- the toy kind: value = gain * record peak * wall height * cor, one value per cell -------
 
@@ -153,21 +153,10 @@ with served(T.ACC, T.SCALE, T.DT):
 
 
 def test_the_toy_kind_resumes_after_its_run_is_killed(toy, tmp_path):
-    root = Path(__file__).resolve().parent.parent
     out = tmp_path / "killed.nc"
     parts = tmp_path / "killed.nc.parts"
-    env = dict(os.environ, **{SLEEP: "0.5"})
-    proc = subprocess.Popen([sys.executable, "-c", RUN, str(toy), str(out)], cwd=root,
-                            env=env, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and proc.poll() is None \
-            and len(list(parts.glob("*.npz"))) < 3:
-        time.sleep(0.02)
-    assert proc.poll() is None, proc.stderr.read().decode()
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    proc.stderr.close()
-    kept = len(list(parts.glob("*.npz")))
+    kept = killed_after_parts(["-c", RUN, str(toy), str(out)], parts, 3,
+                              dict(os.environ, **{SLEEP: "0.5"}), timeout=120)
     assert 3 <= kept < BATCHES and not out.exists()
     ds = urmx.run_study(toy, out=out, scheduler="serial", progress=False, batch_size=1)
     assert len(RUNS) == BATCHES - kept  # the killed run's batches are not run again

@@ -225,9 +225,9 @@ def _windows(batches: Iterator, size: int) -> Iterator[list]:
 
 
 def _window(client: Any, first: list) -> int:
-    """Batches to hand to dask at once: enough to keep every worker busy (32 each, at least
-    `WINDOW`), few enough that the tasks and results in flight stay small (about
-    `WINDOW_CELLS` cells)."""
+    """Batches to hand to dask at once: `WINDOW`, or fewer when they would hold more than
+    `WINDOW_CELLS` cells (the tasks and results in flight stay small), but never fewer than
+    64 or 32 per worker (every worker stays busy)."""
     try:
         workers = len(client.scheduler_info().get("workers", ()))
     except Exception:  # noqa: BLE001 - a scheduler that cannot say: the default
@@ -575,13 +575,12 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
         try:
             store = _claim_parts(parts, study, kinds.get(study.kind), force, notes)
             records = resolve_records(study, records_dir)
-        except BaseException:
+            ds = _run(study, records, store, *args,
+                      archive=(earlier, str(out)) if earlier is not None else None,
+                      notes=tuple(notes))
+        finally:
             if earlier is not None:
                 earlier.close()
-            raise
-        ds = _run(study, records, store, *args,
-                  archive=(earlier, str(out)) if earlier is not None else None,
-                  notes=tuple(notes))
     except BaseException:
         if not any(parts.glob("*.npz")):  # nothing to resume from: leave nothing
             shutil.rmtree(parts, ignore_errors=True)

@@ -12,6 +12,7 @@ import datetime as _dt
 import math
 import os
 import platform
+import subprocess
 import time
 from pathlib import Path
 from typing import Any
@@ -40,6 +41,23 @@ class SectionSkipped(Exception):
 # the converged reference: the tightest of these that runs and agrees with the next one
 CONVERGED_RTOLS = (1e-12, 1e-11, 1e-10)
 SELF_CONVERGED = 1e-8  # peaks of two successive tolerances this close: converged
+
+
+# ---- another commit's source -------------------------------------------------------------
+
+def export_commit(commit: str, where: Path, paths: tuple[str, ...] = ()) -> Path:
+    """The files of `commit` (or only `paths` of it) written into folder `where` by ``git
+    archive``, to run that commit's code beside this one's; kept if `where` holds an export
+    already (with its compiled kernel). No worktree is made, so the repository's
+    worktree list is left alone."""
+    from urmx.config import project_root
+
+    if not (where / "urmx" / "kernel.py").exists():
+        where.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "archive", commit, *paths], cwd=project_root(),
+                                 check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(where)], input=archive, check=True)
+    return where
 
 
 # ---- walls and records ------------------------------------------------------------------

@@ -12,6 +12,7 @@ from functools import cache
 import numpy as np
 
 import urmx
+from urmx.variables import SCALARS
 
 from .fixtures.records import record_file, records_folder
 
@@ -79,3 +80,20 @@ def rel(a: float, b: float) -> float:
 def worst_peak_difference(a: dict, b: dict) -> tuple[float, str]:
     """Largest relative difference over the peak outputs, and its name."""
     return max((rel(a[k], b[k]), k) for k in SCALAR_PEAKS)
+
+
+#: every output of an analysis two solvers must agree on (the archive's scalars, and how
+#: the analysis ended, its events and its holds)
+OUTPUTS = (*SCALARS, "duration", "events", "holds")
+
+
+def differences(a: dict, b: dict) -> dict[str, float]:
+    """Relative difference of every output of `OUTPUTS` between two results (NaN against
+    NaN, as a collapse time without a collapse, is no difference); inf when the statuses
+    differ."""
+    out = {"status": 0.0 if a["status"] == b["status"] else np.inf}
+    for k in OUTPUTS:
+        x, y = float(a[k]), float(b[k])
+        out[k] = 0.0 if x == y or (np.isnan(x) and np.isnan(y)) else \
+            abs(x - y) / max(abs(x), abs(y))
+    return out

@@ -266,6 +266,85 @@ def test_intensity_measures_of_a_record():
     assert m2.psa.attrs["units"] == "m s-2" and float(m2.psa[0]) == float(ms.pga)
 
 
+def sdof_psa_fft(acc, dt, period, damping=0.05):
+    """Pseudo-spectral acceleration of a linear SDOF by the frequency domain (an
+    independent computation: the transfer function of the relative displacement applied to
+    the record's FFT, padded with ten times its length of zeros for the free vibration)."""
+    n = acc.size * 11
+    w = 2 * np.pi * np.fft.rfftfreq(n, dt)
+    wn = 2 * np.pi / period
+    u = np.fft.irfft(-np.fft.rfft(acc, n) / (wn ** 2 - w ** 2 + 2j * damping * wn * w), n)
+    return wn ** 2 * np.max(np.abs(u))
+
+
+def smooth_record(seed=7, n=4000, dt=0.005):
+    """Band-limited noise under a bell envelope (sampled finely: the piecewise-linear
+    recursion and the FFT see the same motion)."""
+    rng = np.random.default_rng(seed)
+    raw = rng.standard_normal(n)
+    kernel = np.hanning(9) / np.hanning(9).sum()
+    return np.convolve(raw, kernel, "same") * np.hanning(n) * 3.0, dt
+
+
+def test_sa_avg_equals_an_independent_frequency_domain_computation():
+    """sa_avg of a record is the geometric mean of the 5 %-damped Sa at its 10 periods, here
+    computed again by the FFT, within 1 %, for a wall's default range and a range given."""
+    acc, dt = smooth_record()
+    w = wall(16)
+    for rng, periods in ((None, F.sa_avg_periods(w)),
+                         ((0.3, 2.0), np.geomspace(0.3, 2.0, 10))):
+        expected = math.exp(np.mean([math.log(sdof_psa_fft(acc, dt, t)) for t in periods]))
+        got = F.record_intensity((acc, dt), "sa_avg", w, period_range=rng)
+        assert got == pytest.approx(expected, rel=0.01)
+        assert len(periods) == F.SA_AVG_PERIODS == 10
+    # proportional to the record, like every measure
+    assert F.record_intensity((2.5 * acc, dt), "sa_avg", w) == pytest.approx(
+        2.5 * F.record_intensity((acc, dt), "sa_avg", w), rel=1e-12)
+    # the same number through urmx.records.measures and collapse_capacity's measure
+    lo, hi = F.sa_avg_range(w)
+    ms = urmx.records.measures((acc, dt), names=["pga"], sa_avg_range=(lo, hi))
+    assert float(ms.sa_avg) == pytest.approx(F.record_intensity((acc, dt), "sa_avg", w),
+                                             rel=1e-12)
+    assert ms.sa_avg.attrs["units"] == "m s-2" and ms.sa_avg.attrs["periods"] == 10
+    all_ims = F.record_measures(acc, dt, [w, wall(8)])
+    for im in F.RECORD_IMS:
+        assert all_ims[im][0] == pytest.approx(F.record_intensity((acc, dt), im, w),
+                                               rel=1e-12)
+    with pytest.raises(ValueError, match="needs the wall"):
+        F.record_intensity((acc, dt), "sa_avg")
+    with pytest.raises(ValueError, match="0 < low <= high"):
+        F.record_intensity((acc, dt), "sa_avg", w, period_range=(2.0, 1.0))
+
+
+def test_sa_avg_default_range_spans_both_periods():
+    """[max(min(T_d, T_r) / sqrt 2, T_r / 2), sqrt 2 max(T_d, T_r)]: both periods inside,
+    half an octave to spare; a stiff or rigid top gives the rocking period's
+    neighbourhood."""
+    w = wall(16)  # D1-like: T_d 1.06 s, T_r 1.04 s
+    tr, td = F.rocking_period(w), F.diaphragm_period(w)
+    lo, hi = F.sa_avg_range(w)
+    assert lo == pytest.approx(min(tr, td) / math.sqrt(2), rel=1e-12)
+    assert hi == pytest.approx(max(tr, td) * math.sqrt(2), rel=1e-12)
+    rigid = w.replace(top_stiffness=RIGID, top_damping=0.0)
+    assert F.sa_avg_range(rigid) == pytest.approx((tr / 2, tr * math.sqrt(2)), rel=1e-12)
+    stiff = w.replace(top_stiffness=100 * w.top_stiffness)
+    assert F.sa_avg_range(stiff)[0] == pytest.approx(tr / 2, rel=1e-12)
+    periods = F.sa_avg_periods(w)
+    assert periods[0] == pytest.approx(lo) and periods[-1] == pytest.approx(hi)
+    assert np.allclose(np.diff(np.log(periods)), np.log(hi / lo) / 9)
+
+
+def test_a_record_with_nan_samples_is_named_as_such():
+    """Today's code called such a record "all zeros" (NaN compares false) or returned NaN."""
+    acc = np.r_[np.zeros(5), 1.0, np.nan, np.sin(np.arange(100.0))]
+    with pytest.raises(urmx.records.RecordError, match="1 NaN or infinite samples.*index 6"):
+        F.collapse_capacity(wall(16), (acc, 0.01))
+    with pytest.raises(urmx.records.RecordError, match="NaN"):
+        F.record_intensity((acc, 0.01), "pga")
+    with pytest.raises(ValueError, match="all zeros"):
+        F.collapse_capacity(wall(16), (np.zeros(100), 0.01))
+
+
 # ---- lognormal fits -----------------------------------------------------------------------------
 
 THETA, BETA = 0.6, 0.4
@@ -356,6 +435,114 @@ def test_fit_multiple_stripe_rejects():
         F.fit_multiple_stripe([1, 2], 10, [0, 0])
     with pytest.raises(ValueError, match="0 <= collapses <= analyses"):
         F.fit_multiple_stripe([1, 2], 10, [3, 11])
+
+
+@pytest.mark.parametrize("call, match", [
+    # today an infinite capacity was dropped silently
+    (lambda: F.fit_lognormal([0.5, 0.7, np.inf, 0.9]), "infinite"),
+    # today a NaN flag was read as censored
+    (lambda: F.fit_lognormal([0.5, 0.7, 0.9], [0, np.nan, 0]), "censored is NaN at index 1"),
+    # today 2.5 collapses were truncated to 2
+    (lambda: F.fit_multiple_stripe([0.3, 0.6, 0.9], 10, [1, 2.5, 8]), "whole numbers; got 2.5"),
+    (lambda: F.fit_multiple_stripe([0.3, 0.6], [10, 9.5], [1, 5]), "whole numbers; got 9.5"),
+    # today one stripe gave an arbitrary median and a dispersion near zero
+    (lambda: F.fit_multiple_stripe([0.5], 20, [7]), "at least two intensity levels"),
+    (lambda: F.fit_multiple_stripe([0.5, 0.5], 20, [7, 9]), "at least two intensity levels"),
+    # stripes perfectly separated: none collapse up to 0.4, all from 0.6
+    (lambda: F.fit_multiple_stripe([0.2, 0.4, 0.6, 0.8], 10, [0, 0, 10, 10]),
+     r"perfectly separated \(all survive up to 0.4, all collapse from 0.6\)"),
+    (lambda: F.fit_multiple_stripe([0.2, 0.4, 0.6], 10, [0, 4, 10]), "perfectly separated"),
+    # a collapse fraction that falls with intensity has no maximum with beta > 0
+    (lambda: F.fit_multiple_stripe([0.2, 0.4, 0.6], 10, [6, 5, 3]), "does not rise"),
+    # today a negative intensity gave NaN
+    (lambda: F.LognormalFit(0.5, 0.4, 10).probability([0.1, -0.2]), "-0.2 is negative"),
+])
+def test_inputs_the_fits_refuse(call, match):
+    with pytest.raises(urmx.errors.InputError, match=match):
+        call()
+
+
+def test_what_the_fits_still_accept():
+    """NaN capacities (cells not run) with NaN flags are left out; whole-number floats are
+    counts; zero intensity has probability 0; stripes whose collapses and survivors overlap
+    over two levels fit."""
+    x, _ = synthetic(30)
+    fit = F.fit_lognormal(np.r_[x, np.nan], np.r_[np.zeros(30), np.nan])
+    assert fit.median == pytest.approx(F.fit_lognormal(x).median, rel=1e-12)
+    a = F.fit_multiple_stripe([0.3, 0.6, 0.9], 10.0, [1.0, 5.0, 8.0], resamples=0)
+    b = F.fit_multiple_stripe([0.3, 0.6, 0.9], 10, [1, 5, 8], resamples=0)
+    assert a.median == b.median and a.dispersion == b.dispersion
+    assert F.LognormalFit(0.5, 0.4, 10).probability(0.0) == 0.0
+    assert np.isnan(F.LognormalFit(0.5, 0.4, 10).probability(np.nan))
+    overlap = F.fit_multiple_stripe([0.2, 0.4, 0.6], 10, [1, 3, 10], resamples=0)
+    assert 0.2 < overlap.median < 0.6 and overlap.dispersion > 0
+
+
+def test_fits_match_the_maximum_likelihood_of_scipy():
+    """Newton's method on the concave likelihood reaches the maximum Nelder-Mead finds (the
+    fit before this change), with and without censoring, to 1e-7."""
+    from scipy.optimize import minimize
+
+    censor_at = THETA * math.exp(BETA * norm.ppf(0.8))
+    x, c = synthetic(60, 9, censor_at)
+    lx = np.log(x)
+
+    def nll(p):
+        return -(np.sum(norm.logpdf(lx[~c], p[0], math.exp(p[1])))
+                 + np.sum(norm.logsf(lx[c], p[0], math.exp(p[1]))))
+    ref = minimize(nll, [lx.mean(), math.log(lx.std())], method="Nelder-Mead",
+                   options={"xatol": 1e-12, "fatol": 1e-14, "maxiter": 8000}).x
+    fit = F.fit_lognormal(x, c, resamples=0)
+    assert fit.median == pytest.approx(math.exp(ref[0]), rel=1e-7)
+    assert fit.dispersion == pytest.approx(math.exp(ref[1]), rel=1e-7)
+
+
+@pytest.mark.parametrize("censor", [False, True])
+def test_bootstrap_intervals_cover_the_true_median_at_their_level(censor):
+    """200 seeded synthetic record sets of 40 capacities (theta 0.6, beta 0.4; with a fifth
+    censored): the 90 % percentile interval of the median holds theta in 0.84-0.95 of
+    them (a percentile bootstrap of 40 runs a little under its level)."""
+    censor_at = THETA * math.exp(BETA * norm.ppf(0.8)) if censor else None
+    hits = 0
+    for trial in range(200):
+        x, c = synthetic(40, 1000 + trial, censor_at)
+        fit = F.fit_lognormal(x, c, resamples=400, seed=trial)
+        assert fit.confidence == 0.9 and fit.resamples == 400
+        hits += fit.median_ci[0] <= THETA <= fit.median_ci[1]
+    assert 0.84 <= hits / 200 <= 0.95
+
+
+def test_multiple_stripe_bootstrap_covers_the_true_median():
+    """Stripes with their own 20 records each at 6 levels (an MSA): the 90 % interval of the
+    median holds theta in 0.82-0.96 of 150 seeded trials."""
+    levels = np.array([0.3, 0.4, 0.5, 0.65, 0.8, 1.0])
+    p = norm.cdf(np.log(levels / THETA) / BETA)
+    rng = np.random.default_rng(5)
+    hits = done = 0
+    for trial in range(150):
+        z = rng.binomial(20, p)
+        try:
+            fit = F.fit_multiple_stripe(levels, 20, z, resamples=400, seed=trial)
+        except urmx.errors.InputError:
+            continue
+        done += 1
+        hits += fit.median_ci[0] <= THETA <= fit.median_ci[1]
+    assert done >= 140 and 0.82 <= hits / done <= 0.96
+
+
+def test_bootstrap_is_seeded():
+    x, _ = synthetic(40)
+    a, b = F.fit_lognormal(x, seed=3), F.fit_lognormal(x, seed=3)
+    assert a.median_ci == b.median_ci and a.dispersion_ci == b.dispersion_ci
+    assert F.fit_lognormal(x, seed=4).median_ci != a.median_ci
+    assert a.median_ci[0] < a.median < a.median_ci[1]
+    assert a.dispersion_ci[0] < a.dispersion < a.dispersion_ci[1]
+    assert math.isnan(F.fit_lognormal(x, resamples=0).median_ci[0])
+    assert math.isnan(F.fit_lognormal(x[:4]).median_ci[0])  # too few records
+    with pytest.raises(ValueError, match="confidence=1.5"):
+        F.fit_lognormal(x, confidence=1.5)
+    med, disp = F.bootstrap_lognormal(x, resamples=50, seed=3)
+    assert med.shape == disp.shape == (50,) and np.isfinite(med).all()
 
 
 # ---- the IDA study kind on a stand-in kernel ----------------------------------------------------
@@ -707,7 +894,7 @@ def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path
     text = path.read_text()
     for name in ("ida_D1.png", "ida_D4-both.png", "fragility_curves.png",
                  "median_vs_slenderness.png", "median_vs_frequency.png", "resonance.png",
-                 "stiffening.png"):
+                 "stiffening.png", "efficiency.png", "collapse_risk.png"):
         assert (tmp_path / "rep" / name).read_bytes()[:4] == b"\x89PNG"
         assert f"]({name})" in text
     assert "falls with h/t on 4 of 4 diaphragms (Spearman rho -1 to -1)" in text
@@ -721,5 +908,10 @@ def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path
     row = re.search(r"\| s16 \| 16 \| ([0-9.]+) \(([0-9.]+)\)", text)
     assert float(row.group(1)) == pytest.approx(med, abs=1.5e-3)
     assert float(row.group(2)) == pytest.approx(math.log(200 / 150) / 2, abs=0.01)
+    # issue 26: the measures and the risk, from the same run (the stand-in kernel collapses
+    # at a PGA threshold: pga is the efficient measure here)
+    assert "## Which intensity measure predicts collapse best?" in text
+    assert "urmx recommends `pga`" in text and "## Collapse risk" in text
+    assert "### Stiffening the diaphragm: D1 -> D4" in text
     with pytest.raises(ValueError, match="not an IDA archive"):
         write_report(xr.Dataset({"x": ("a", [1.0])}), tmp_path / "bad")

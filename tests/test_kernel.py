@@ -9,12 +9,14 @@ continuous-time peaks, the impact window and the two impact laws.
 from __future__ import annotations
 
 import math
+import re
 import time
 
 import numpy as np
 import pytest
 
 from urmx import kernel, model, reference
+from urmx.errors import InputError
 
 from .kernel_helpers import (
     C9,
@@ -474,3 +476,43 @@ def test_contact_and_scale_laws_agree_with_both_supports_rigid():
     th = a["history"]["theta_lower"]
     np.testing.assert_allclose(b["history"]["theta_lower"], th, rtol=0,
                                atol=1e-10 * np.max(np.abs(th)))
+
+
+# ---- 13. bounded work ------------------------------------------------------------------
+
+@pytest.mark.parametrize("dt", [1e300, 2.0, 1e-7])
+def test_a_record_step_outside_the_accepted_range_is_refused(dt):
+    """dt = 1e300 ended in an overflow in the propagator; every step outside 1e-6 .. 1 s is
+    an InputError that names it and the range."""
+    with pytest.raises(InputError, match=rf"^dt={re.escape(repr(dt))} s .* must lie in "
+                                         r"\[1e-06, 1\] s$"):
+        kernel.run(WALL12_RIGID, np.ones(5), dt)
+    kernel.run(WALL12_RIGID, np.ones(5), 1.0)  # the bounds themselves run
+    kernel.run(WALL12_RIGID, np.ones(5), 1e-6, window=1e-7)
+
+
+def test_a_spring_needing_too_many_substeps_is_refused():
+    """A spring whose sub-step count passes MAX_SUBSTEPS is refused when the tables are
+    built, naming its stiffness, the count and the bound and advising `rigid`: the 1e9 N/m
+    springs of Wall 12 (no diaphragm mass) need 101 sub-steps at dt = 0.02 s and 2,525 at
+    0.5 s; Wall(top_stiffness=1e30) needed 2.3e12 and ran without end."""
+    assert int(kernel.tables(WALL12_SPRING, 0.02).nsub.max()) == 101
+    with pytest.raises(InputError, match=r"^(bottom|top)_stiffness=1e\+09 N/m needs 2\.5\de\+03 "
+                                         r"sub-steps per record step of 0\.5 s, above the bound "
+                                         r"of 1000: .* declare the support rigid"):
+        kernel.run(WALL12_SPRING, np.ones(5), 0.5)
+    stiff = WALL12_RIGID.replace(top_stiffness=1e30)
+    with pytest.raises(InputError, match=r"^top_stiffness=1e\+30 N/m needs 2\.\d+e\+12 sub-steps"
+                                         r".*top_stiffness = \"rigid\""):
+        kernel.run(stiff, np.ones(5), 0.02)
+
+
+def test_every_catalog_wall_stays_within_the_substep_bound():
+    """Every catalog cell (the statuses benchmark's: parametric walls on every diaphragm,
+    single- and higher-storey, and the Table II walls) at the paper's record steps."""
+    from benchmarks.sections.statuses import cells
+
+    worst = max(int(kernel.tables(w, dt).nsub.max()) for _, _, w in cells()
+                for dt in (0.005, 0.01, 0.02))
+    assert worst <= kernel.MAX_SUBSTEPS
+    assert worst == 6  # D5, the 1e9 N/m spring with the building's diaphragm mass

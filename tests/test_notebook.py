@@ -33,5 +33,6 @@ def test_fragility_notebook_runs(records_dir, tmp_path, monkeypatch):
     assert "collapse PGA" in joined and "censored: False" in joined
     assert "True {'wall': 3, 'diaphragm': 3, 'record': 8, 'cor': 1" in joined  # lazy, sizes
     assert "stripes:" in joined
+    assert "90 % interval" in joined and "collapses per year" in joined  # issue 26
     assert any(o.output_type == "display_data" and "image/png" in o.get("data", {})
                for c in nb.cells for o in c.get("outputs", []))  # the fragility curve

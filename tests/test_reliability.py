@@ -25,6 +25,7 @@ import pytest
 import xarray as xr
 
 import urmx
+import urmx.netcdf
 import urmx.records
 from urmx import analysis as A
 from urmx import study as st
@@ -634,7 +635,10 @@ def test_parts_of_another_kernel_source_are_recomputed(fake_records, gaps, ida_g
     monkeypatch.setattr(urmx.jitcache, "SOURCE_HASH", "f" * 16)
     new_keys = {b.key for b, _ in st.batch_tasks(study, records, 2, kernel)}
     assert len(new_keys) == len(old_keys) == 6 and not new_keys & old_keys
-    _same(reference, run(changed))
+    again = run(changed)
+    assert again.attrs["kernel_source_hash"] == "f" * 16  # the archive says which kernel
+    again.attrs["kernel_source_hash"] = reference.attrs["kernel_source_hash"]
+    _same(reference, again)
     assert len(calls) == total
 
 
@@ -652,6 +656,330 @@ def test_outputs_checked_before_any_work(fake_records, gaps, tmp_path):
             st.run_study(gaps, out=out, kernel=counting, scheduler="serial", progress=False)
         assert str(out) in str(err.value)
     assert calls == []
+
+
+# ---- an input never becomes an output; outputs checked before the work ------------------
+
+def _counting(calls: list):
+    """`fake_kernel`, counting its calls in `calls`; under fake_kernel's name, so that its
+    batches have fake_kernel's keys (a run with it resumes one with fake_kernel)."""
+    def kernel(*args, **kw):
+        calls.append(1)
+        return fake_kernel(*args, **kw)
+
+    kernel.__module__, kernel.__qualname__ = fake_kernel.__module__, fake_kernel.__qualname__
+    return kernel
+
+
+def test_an_input_is_never_the_output(fake_records, gaps, tmp_path, monkeypatch, capsys):
+    """`--out` naming the study file (by its name or a hard link), a record's file or the
+    records manifest is refused before any work, and the input is left as it was."""
+    from urmx.cli import main
+
+    text = gaps.read_text()
+    calls: list = []
+    link = tmp_path / "alias.toml"
+    os.link(gaps, link)
+    for out in (gaps, link, tmp_path / "sub" / ".." / "gaps.toml"):
+        with pytest.raises(OutputError, match=r"archive .* is the study file .*gaps\.toml.*"
+                           "an input is never overwritten") as err:
+            st.run_study(gaps, out=out, kernel=_counting(calls), scheduler="serial",
+                         progress=False)
+        assert str(out) in str(err.value)
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(OutputError, match="is the study file"):
+        st.run_study(gaps, out=tmp_path / "sub" / ".." / "gaps.toml", kernel=_counting(calls))
+    # a record's file and its manifest, as the manifest names them
+    files = {rid: tmp_path / f"{rid}.txt" for rid in ACC}
+    manifest_file = tmp_path / "manifest.toml"
+    for path in (*files.values(), manifest_file):
+        path.write_text("kept\n")
+    serve = urmx.records.manifest
+
+    def manifest(records_dir=None):
+        return {rid: dict(e, path=str(files[rid]), manifest=str(manifest_file))
+                for rid, e in serve(records_dir).items()}
+
+    monkeypatch.setattr(urmx.records, "manifest", manifest)
+    for out, what in ((files["shake"], "the file of record 'shake'"),
+                      (manifest_file, "the records manifest")):
+        with pytest.raises(OutputError, match=f"is {what} "):
+            st.run_study(gaps, out=out, kernel=_counting(calls), scheduler="serial")
+        assert out.read_text() == "kept\n"
+    assert calls == [] and gaps.read_text() == text
+    # the command line: one line, exit 2
+    assert main(["run", str(gaps), "--out", str(gaps), "--scheduler", "serial"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("urmx run: error: archive ") and err.count("\n") == 1
+    assert gaps.read_text() == text
+
+
+def test_simulate_and_records_never_write_over_their_inputs(tmp_path, capsys):
+    from urmx.cli import main
+
+    wall = tmp_path / "wall.toml"
+    shutil.copy(Path(urmx.__file__).parents[1] / "catalog" / "examples" / "benchmark-wall.toml",
+                wall)
+    rec = tmp_path / "rec.txt"
+    rec.write_text("\n".join(f"{v:.3f}" for v in ACC["quake"]) + "\n")
+    before = {p: p.read_bytes() for p in (wall, rec)}
+    common = ["simulate", str(wall), str(rec), "--dt", "0.01", "--unit", "m/s2"]
+    for option, target, what in (("--out", rec, "the record file"),
+                                 ("--plot", rec, "the record file"),
+                                 ("--out", wall, "the wall file")):
+        assert main([*common, option, str(target)]) == 2
+        err = capsys.readouterr().err
+        assert f"{option} {str(target)!r} is {what}" in err and err.count("\n") == 1
+    assert main([*common, "--out", str(tmp_path / "a.nc"), "--plot",
+                 str(tmp_path / "a.nc")]) == 2
+    assert "name the same file" in capsys.readouterr().err
+    assert main(["records", "plot", str(rec), "--dt", "0.01", "--unit", "m/s2", "--out",
+                 str(rec)]) == 2
+    assert "is the record file" in capsys.readouterr().err
+    folder = tmp_path / "suite"
+    folder.mkdir()
+    shutil.copy(rec, folder / "a.txt")
+    assert main(["records", "index", str(folder), "--dt", "0.01", "--unit", "m/s2", "--out",
+                 str(folder / "a.txt")]) == 2
+    assert "is the record file" in capsys.readouterr().err
+    assert {p: p.read_bytes() for p in (wall, rec)} == before
+    assert (folder / "a.txt").read_bytes() == before[rec]
+
+
+def _leftovers(*folders: Path) -> list[Path]:
+    """Temporary files (urmx's ``.*.tmp``, ``.*.npz.tmp`` and output probes) in `folders`,
+    recursively."""
+    return [p for f in folders for p in f.rglob(".*") if ".tmp" in p.name
+            or p.name.startswith(".urmx-probe")]
+
+
+def test_out_through_a_symlink_and_dotdot_is_resolved_before_the_work(fake_records, gaps,
+                                                                       tmp_path):
+    """``link/../x.nc`` with ``link`` a symbolic link to ``a/b``: the operating system's
+    ``a/x.nc``. The path is resolved before the work, and the run writes exactly there
+    (it used to run the whole study, then fail, leaving the archive as a hidden .tmp file
+    in another folder)."""
+    (tmp_path / "a" / "b").mkdir(parents=True)
+    (tmp_path / "link").symlink_to(tmp_path / "a" / "b")
+    out = tmp_path / "link" / ".." / "x.nc"
+    ds = _run(gaps, out=out)
+    _check_reductions(ds)
+    assert (tmp_path / "a" / "x.nc").is_file() and not (tmp_path / "x.nc").exists()
+    _same(ds, urmx.open_study(tmp_path / "a" / "x.nc").load())
+    assert _leftovers(tmp_path) == []
+    assert not (tmp_path / "a" / "x.nc.parts").exists()
+
+
+def test_out_name_that_is_not_utf8_is_refused_before_the_work(fake_records, gaps, tmp_path):
+    calls: list = []
+    out = Path(os.fsdecode(os.fsencode(tmp_path) + b"/r\xe9sultat.nc"))  # Latin-1 bytes
+    with pytest.raises(OutputError, match=r"r\\udce9sultat\.nc' cannot be written: its name is "
+                       "not valid UTF-8"):
+        st.run_study(gaps, out=out, kernel=_counting(calls), scheduler="serial",
+                     progress=False)
+    assert calls == [] and os.listdir(os.fsencode(tmp_path)) == [b"gaps.toml"]
+
+
+# ---- a full disk --------------------------------------------------------------------------
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 2 MB tmpfs mounted for the test (None when mounting is not permitted: not root, or
+    no tmpfs)."""
+    folder = tmp_path / "disk"
+    folder.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(folder)],
+                          capture_output=True) if os.geteuid() == 0 else None
+    if done is None or done.returncode != 0:
+        yield None
+        return
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", "-l", str(folder)], capture_output=True)
+
+
+def fill(folder: Path) -> Path:
+    """Fill the disk of `folder` to the last byte with a file; returns it."""
+    import errno
+
+    ballast = folder / "ballast"
+    fd = os.open(ballast, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
+    try:
+        for size in (1 << 20, 1 << 14, 1 << 10, 64, 1):
+            try:
+                while True:
+                    os.write(fd, b"\0" * size)
+            except OSError as exc:
+                if exc.errno != errno.ENOSPC:
+                    raise
+    finally:
+        os.close(fd)
+    return ballast
+
+
+def _disk(way: str, small_disk, tmp_path) -> Path:
+    if way == "tmpfs":
+        if small_disk is None:
+            pytest.skip("mounting a tmpfs is not permitted here (the 'patched' case runs)")
+        return small_disk
+    return tmp_path
+
+
+def _enospc():
+    import errno
+
+    return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+@pytest.mark.parametrize("way", ["tmpfs", "patched"])
+def test_a_full_disk_while_saving_parts_says_what_is_kept(fake_records, gaps, small_disk,
+                                                         tmp_path, monkeypatch, way):
+    """The disk fills after 3 of 6 batches: one line saying how many batches are kept and
+    what to do, no temporary file left (a 0-byte one used to stay), and after freeing
+    space the same run finishes with the 3 kept."""
+    disk = _disk(way, small_disk, tmp_path)
+    out = disk / "gaps.nc"
+    parts = disk / "gaps.nc.parts"
+    reference = _run(gaps)
+    saved = []
+    real_save = st.PartStore.save
+    real_savez = np.savez
+
+    def save(self, key, result, *cells):
+        if len(saved) == 3 and way == "tmpfs":
+            fill(disk)
+        path = real_save(self, key, result, *cells)
+        saved.append(key)
+        return path
+
+    def savez(file, *args, **kw):  # the 'patched' disk: full at the fourth part
+        if len(saved) == 3:
+            file.write(b"PK")  # an open temporary file: a few bytes, then the disk is full
+            raise _enospc()
+        return real_savez(file, *args, **kw)
+
+    with monkeypatch.context() as patch, pytest.raises(OutputError) as err:
+        patch.setattr(st.PartStore, "save", save)
+        if way == "patched":
+            patch.setattr(np, "savez", savez)
+        _run(gaps, out=out)
+    message = str(err.value)
+    assert "\n" not in message
+    assert message.startswith(f"cannot write part file in {str(parts)!r}: No space left on "
+                              f"device; 3 finished batches kept in {str(parts)!r}: free space "
+                              "on its disk and run the same command again to resume"), message
+    assert len(list(parts.glob("*.npz"))) == 3 and _leftovers(disk) == []
+    if way == "tmpfs":
+        (disk / "ballast").unlink()
+    calls: list = []
+    ds = st.run_study(gaps, out=out, kernel=_counting(calls), batch_size=2, scheduler="serial",
+                      progress=False)
+    assert 0 < len(calls) < 12  # of the 12 analyses, those of the 3 kept batches not again
+    _same(reference, ds)
+    assert _leftovers(disk) == [] and not parts.exists()
+
+
+@pytest.mark.parametrize("way", ["tmpfs", "patched"])
+def test_a_full_disk_at_the_final_write_keeps_the_parts(fake_records, gaps, small_disk,
+                                                        tmp_path, monkeypatch, way):
+    """The disk fills after the last batch is saved: the archive write fails with one line
+    saying that the parts are kept and how to finish (it used to be `NetCDF: HDF error`
+    alone), no temporary file is left, and after freeing space the same run writes the
+    archive without computing anything."""
+    disk = _disk(way, small_disk, tmp_path)
+    out = disk / "gaps.nc"
+    parts = disk / "gaps.nc.parts"
+    reference = _run(gaps)
+    real_save = st.PartStore.save
+
+    def save(self, key, result, *cells):
+        path = real_save(self, key, result, *cells)
+        if way == "tmpfs" and self.count() == 6:
+            fill(disk)
+        return path
+
+    def to_netcdf(self, path, *args, **kw):  # what netCDF4 raises when HDF5 fails
+        Path(path).write_bytes(b"\x89HDF\r\n")
+        raise RuntimeError("NetCDF: HDF error")
+
+    with monkeypatch.context() as patch, pytest.raises(OutputError) as err:
+        patch.setattr(st.PartStore, "save", save)
+        if way == "patched":  # netCDF4's error, on a disk that says it is full
+            patch.setattr(xr.Dataset, "to_netcdf", to_netcdf)
+            patch.setattr(urmx.netcdf, "disk_full", lambda folder, below=1e6: True)
+        _run(gaps, out=out)
+    message = str(err.value)
+    assert "\n" not in message
+    assert message.startswith(f"cannot write netCDF file {str(out)!r}: "), message
+    assert "MB free on its disk: the disk is full); " in message  # whatever netCDF says
+    if way == "patched":
+        assert "NetCDF: HDF error (" in message
+    assert message.endswith(f"; 6 finished batches kept in {str(parts)!r}: free space on its "
+                            "disk and run the same command again: the archive is written "
+                            "from them, nothing is computed again"), message
+    assert not out.exists() and _leftovers(disk) == []
+    assert len(list(parts.glob("*.npz"))) == 6
+    if way == "tmpfs":
+        (disk / "ballast").unlink()
+    calls: list = []
+    ds = st.run_study(gaps, out=out, kernel=_counting(calls), batch_size=2, scheduler="serial",
+                      progress=False)
+    assert calls == []
+    _same(reference, ds)
+    _same(reference, urmx.open_study(out).load())
+    assert _leftovers(disk) == []
+
+
+@pytest.mark.parametrize("way", ["tmpfs", "patched"])
+def test_a_full_disk_before_the_run_is_said_before_any_work(fake_records, gaps, small_disk,
+                                                            tmp_path, monkeypatch, way):
+    """A test file is written (and flushed) where the archive goes before anything is
+    computed: a full disk stops the run at once."""
+    disk = _disk(way, small_disk, tmp_path)
+    out = disk / "gaps.nc"
+    if way == "tmpfs":
+        fill(disk)
+    else:
+        def fsync(fd):
+            raise _enospc()
+
+        monkeypatch.setattr(os, "fsync", fsync)
+    calls: list = []
+    with pytest.raises(OutputError, match=rf"archive {str(out)!r} cannot be written: a test "
+                       rf"file in {str(disk)!r} failed: No space left on device"):
+        st.run_study(gaps, out=out, kernel=_counting(calls), scheduler="serial",
+                     progress=False)
+    assert calls == [] and not (disk / "gaps.nc.parts").exists() and _leftovers(disk) == []
+
+
+# ---- SIGTERM -------------------------------------------------------------------------------
+
+def test_sigterm_stops_like_ctrl_c(tmp_path):
+    """SIGTERM (``kill PID``, a batch system ending a job) once a few batches are saved:
+    exit 143 and one line saying what is kept, as Ctrl-C does; the same command then
+    finishes. (It used to die silently, with status -15.)"""
+    from .fixtures import cluster as C
+
+    study = tmp_path / "cluster.toml"
+    study.write_text(C.STUDY)
+    out = tmp_path / "term.nc"
+    parts = tmp_path / "term.nc.parts"
+    args = ["run", str(study), "--out", str(out), "--scheduler", "serial", "--batch-size",
+            "1", "--quiet"]
+    proc = C.urmx_run(args, sleep=0.05)
+    C.wait_until(lambda: C.parts_of(out) >= 3, C.START, "3 batches saved", proc)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    kept = C.parts_of(out)
+    assert proc.returncode == 143, err
+    assert err == (f"urmx run: terminated; {kept} finished batches kept in {parts}/: run the "
+                   "same command again to resume\n")
+    assert 3 <= kept < C.BATCHES and not out.exists() and _leftovers(tmp_path) == []
+    again = C.urmx_run(args)
+    _, err = again.communicate(timeout=120)
+    assert again.returncode == 0, err
+    assert out.is_file() and not parts.exists()
 
 
 # ---- progress ----------------------------------------------------------------------------
@@ -725,3 +1053,24 @@ def test_ctrl_c_gives_one_line(tmp_path):
     assert len(lines) == 1, err
     assert lines[0].startswith("urmx run: interrupted; ") and str(parts) in lines[0]
     assert not out.exists() and len(list(parts.glob("*.npz"))) >= 3
+
+
+def test_a_part_being_written_is_never_counted_as_a_part(tmp_path, monkeypatch):
+    """A part is written under a temporary name that no ``*.npz`` glob matches: the
+    interrupt test once saw three parts, of which one was still being written and was
+    deleted by the SIGINT (a count that went down)."""
+    from urmx.study.parts import PartStore
+
+    store = PartStore(tmp_path, ("a",))
+    seen = []
+    real = os.replace
+
+    def spy(src, dst):
+        seen.append((Path(src).name, sorted(p.name for p in tmp_path.glob("*.npz"))))
+        real(src, dst)
+
+    monkeypatch.setattr(os, "replace", spy)
+    store.save("k1", {"a": np.arange(3.0)}, np.arange(3, dtype=np.uint64))
+    assert seen == [(f".k1.{os.getpid()}.npz.tmp", [])]
+    assert store.count() == 1 and sorted(p.name for p in tmp_path.iterdir()) == ["k1.npz"]
+    assert np.array_equal(store.load("k1")["a"], np.arange(3.0))

@@ -30,9 +30,9 @@ _LAZY = {
 
 
 _SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_analysis",
-               "fragility_report", "guard", "kernel", "markdown", "model", "netcdf", "paper",
-               "plot", "records", "reference", "report", "reporting", "simulation", "study",
-               "variables")
+               "fragility_report", "generic_report", "guard", "kernel", "markdown", "model",
+               "netcdf", "paper", "plot", "records", "reference", "report", "reporting",
+               "simulation", "study", "variables")
 
 
 def __getattr__(name):

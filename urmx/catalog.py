@@ -1,4 +1,5 @@
-"""The catalog: walls, diaphragms, the parametric building and study files (``catalog/*.toml``).
+"""The catalog and study files: walls, diaphragms, the parametric building (``catalog/*.toml``)
+and the study files that run them, read and checked before any computation.
 
 Data lives in the top-level ``catalog/`` folder, never in code:
 
@@ -11,45 +12,111 @@ Data lives in the top-level ``catalog/`` folder, never in code:
 - ``paper.toml``: the paper's own numbers (read by :mod:`urmx.paper`, which also fits the
   building to them).
 
-A study file may also define its own walls (``[walls.<id>]``) and diaphragms
-(``[diaphragms.<id>]``) beside ``[study]``; they extend the catalog. A diaphragm entry
-``"D1/both"`` (or ``"D1/top"``) gives the cells on it their own supports, so that one study
-holds single- and higher-storey walls. A ``[study.<kind>]`` table names the study's kind
-and holds its settings: the catalog keeps it as data (``Study.tables``), refuses a table no
-registered kind reads, and has the kind parse it (`urmx.study.kinds`); a study without one
-is the default kind. Every error names the file, the key and (where it can be found) the
-line.
+A study file may also define its own walls (``[walls.<id>]``, by their masses or in building
+terms), diaphragms (``[diaphragms.<id>]``) and record files (``[records.<id>]``, a file or a
+folder of files) beside ``[study]``; an own item with a catalog id must say
+``override = true``. A diaphragm entry ``"D1/both"`` (or ``"D1/top"``) gives the cells on
+it their own supports, so that one study holds single- and higher-storey walls. A
+``[study.<kind>]`` table names the study's kind and holds its settings: the catalog keeps
+it as data (``Study.tables``), refuses a table no registered kind reads, and has the kind
+parse it (`urmx.study.kinds`); a study without one is the default kind.
+
+Every key a study file (and a catalog file) accepts is declared once, in `STUDY_FILE_KEYS`
+and `CATALOG_FILE_KEYS` (with each registered kind's ``keys``: :func:`file_keys`); the
+loader refuses any other key, and ``docs/study-files.md`` documents exactly these (a test
+holds the two together). Ids are compared in Unicode normal form NFC. Every error names
+the file, the key and (where it can be found) the line.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import os
 import re
 import sys
+import unicodedata
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .config import project_root
+from .config import data_dir
 from .errors import MissingFileError, UrmxError
-from .model import PAPER_G, RIGID, Wall
+from .model import EFFECTIVE_MASS, RIGID, Wall, effective_diaphragm_mass, effective_wall_mass
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-EFFECTIVE_MASS = 8.0 / 15.0  # Eq. 7: effective over nominal mass of walls and diaphragms
+__all__ = ["EFFECTIVE_MASS", "CatalogError", "Catalog", "Building", "Diaphragm", "WallSpec",
+           "Study", "History", "OwnRecord", "load_catalog", "load_study", "read_wall",
+           "study_path", "file_keys", "STUDY_FILE_KEYS", "CATALOG_FILE_KEYS"]
+
 SPECIMEN = "specimen"  # the diaphragm id meaning "the wall's own supports" (test walls)
 SUPPORTS = ("top", "both", SPECIMEN)
 IMPACT_LAWS = ("scale", "contact")
-WALL_FIELDS = ("thickness", "height", "crack_ratio", "mass", "bottom_mass", "top_mass",
-               "bottom_stiffness", "top_stiffness", "bottom_damping", "top_damping", "pmr",
-               "kappa")
+#: the supports' fields of a Wall: a wall table that states any of them keeps its own supports
+SUPPORT_FIELDS = ("bottom_mass", "top_mass", "bottom_stiffness", "top_stiffness",
+                  "bottom_damping", "top_damping")
+WALL_FIELDS = ("thickness", "height", "crack_ratio", "mass", *SUPPORT_FIELDS, "pmr", "kappa")
+#: a wall given in building terms (`urmx.Wall.in_building`): its mass from the masonry
+#: density and the out-of-plane walls' length (Eq. 7), and, with the diaphragm terms, its
+#: own diaphragm (weight over the plan area, and stiffness or frequency)
+MASS_TERMS = ("density", "wall_length")
+DIAPHRAGM_TERMS = ("diaphragm_weight", "plan_area", "diaphragm_stiffness",
+                   "diaphragm_frequency", "supports", "damping")
+#: keys of a wall table (``walls.toml``, a study's ``[walls.<id>]``, a wall file)
+WALL_KEYS = (*WALL_FIELDS, "allow_unusual", *MASS_TERMS, *DIAPHRAGM_TERMS, "name", "source",
+             "records")
+#: keys of a diaphragm table (``diaphragms.toml``, a study's ``[diaphragms.<id>]``)
+DIAPHRAGM_KEYS = ("stiffness", "damping", "description", "direction")
+#: keys of a study's ``[records.<id>]`` table: one record file, or a folder of them
+RECORD_KEYS = ("file", "folder", "pattern", "channel", "dt", "unit", "format", "scale",
+               "sha256", "allow_unusual", "override")
 # dimensions of a study's grid, in order; the last three are optional (study keys)
 DIMS = ("wall", "diaphragm", "record", "cor", "scale", "impact", "damping")
+
+#: every key of a study file by table: the one declaration the loader checks tables
+#: against (a registered kind's ``[study.<kind>]`` keys are its ``Kind.keys``:
+#: :func:`file_keys`). ``<wall id>`` and ``<record id>`` stand for keys that are ids.
+STUDY_FILE_KEYS: dict[str, tuple[str, ...]] = {
+    "[study]": ("name", "title", "description", "walls", "diaphragms", "supports", "records",
+                "cor", "scale", "impact", "damping", "tail", "catalog"),
+    "[study.pairs]": ("<wall id>",),
+    "[study.scale_factor]": ("<record id>",),
+    "[[study.history]]": ("wall", "diaphragm", "record", "cor"),
+    "[walls.<id>]": (*WALL_KEYS, "override"),
+    "[diaphragms.<id>]": (*DIAPHRAGM_KEYS, "override"),
+    "[records.<id>]": RECORD_KEYS,
+}
+#: every key of the catalog files a study can bring (``[study] catalog = "folder"``)
+CATALOG_FILE_KEYS: dict[str, tuple[str, ...]] = {
+    "building.toml [building]": ("plan", "density", "wall_length", "diaphragm_weight"),
+    "building.toml [parametric_walls]": ("thickness", "crack_ratio", "pmr", "kappa",
+                                         "slenderness"),
+    "building.toml [calibration]": ("instability_wall", "instability_weight"),
+    "walls.toml [<id>]": WALL_KEYS,
+    "diaphragms.toml [<id>]": DIAPHRAGM_KEYS,
+}
+#: the ``[study]`` table's sub-tables (beside a registered kind's ``[study.<kind>]``)
+_STUDY_SUBTABLES = ("pairs", "scale_factor", "history")
+STUDY_KEYS = (*STUDY_FILE_KEYS["[study]"], *_STUDY_SUBTABLES)  # keys of [study] itself
+
+
+def file_keys() -> dict[str, tuple[str, ...]]:
+    """Every table a study file and a catalog file may hold, with its keys:
+    `STUDY_FILE_KEYS`, each built-in kind's ``[study.<kind>]`` with its ``Kind.keys``, and
+    `CATALOG_FILE_KEYS` (what ``docs/study-files.md`` must document)."""
+    from .study import kinds
+
+    out = dict(STUDY_FILE_KEYS)
+    for kind in kinds.BUILT_IN:
+        if kind.table:
+            out[f"[study.{kind.table}]"] = tuple(kind.keys)
+    out.update(CATALOG_FILE_KEYS)
+    return out
 
 
 class CatalogError(UrmxError, ValueError):
@@ -73,7 +140,7 @@ def damping_ratio_problem(name: str, value: Any) -> str | None:
 
 def damping_problem(table: dict) -> str | None:
     """The first damping field of a table of Wall fields that is not a ratio, or None."""
-    for name in ("bottom_damping", "top_damping"):
+    for name in ("bottom_damping", "top_damping", "damping"):
         problem = damping_ratio_problem(name, table.get(name))
         if problem:
             return problem
@@ -81,14 +148,22 @@ def damping_problem(table: dict) -> str | None:
 
 
 def catalog_dir(path: str | os.PathLike | None = None) -> Path:
-    """The catalog folder: `path`, else ``catalog/`` of the source checkout."""
-    return Path(path) if path is not None else project_root() / "catalog"
+    """The catalog folder: `path`, else ``catalog/`` of the source checkout, or the copy an
+    installed wheel carries (`urmx.config.data_dir`)."""
+    return Path(path) if path is not None else data_dir("catalog")
+
+
+def nfc(text: str) -> str:
+    """An id in Unicode normal form NFC, the one form ids are compared in."""
+    return unicodedata.normalize("NFC", text)
 
 
 # ---- locating keys in TOML text for error messages -------------------------------------
 
 class _Source:
-    """A parsed TOML file that can point at the line of a key or value."""
+    """A parsed TOML file that can point at the line of a key or value; its tables' keys
+    in NFC (two keys of one table that are the same text in different normal forms are
+    refused)."""
 
     def __init__(self, path: Path):
         self.path = Path(path)
@@ -100,19 +175,45 @@ class _Source:
             raise CatalogError(f"{self.path}: cannot be read as a TOML file "
                                f"({getattr(exc, 'strerror', None) or exc})") from None
         try:
-            self.data = tomllib.loads(self.text)
+            data = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError as exc:
             raise CatalogError(f"{self.path}: not valid TOML: {exc}") from None
+        self.data = self._normal(data, "")
+
+    def _normal(self, value: Any, where: str) -> Any:
+        """`value` with every table's keys in NFC, recursively."""
+        if isinstance(value, list):
+            return [self._normal(v, f"{where}[{i}]") for i, v in enumerate(value)]
+        if not isinstance(value, dict):
+            return value
+        out: dict = {}
+        spelt: dict[str, str] = {}
+        for k, v in value.items():
+            n = nfc(k)
+            if n in out:
+                key = f"{where}.{n}".lstrip(".")
+                line = next((i for i, ln in enumerate(self.text.splitlines(), 1)
+                             if k in ln.split("#", 1)[0]
+                             and ln.lstrip().startswith(("[", k, f'"{k}"'))), None)
+                at = f"{self.path}:{line}" if line else str(self.path)
+                raise CatalogError(f"{at}: {key}: {spelt[n]!r} and {k!r} are the same text "
+                                   "in different Unicode normal forms (NFC and NFD): one "
+                                   "id, given twice")
+            spelt[n] = k
+            out[n] = self._normal(v, f"{where}.{n}".lstrip("."))
+        return out
 
     def line(self, *needles: str) -> int | None:
         """First line holding the last needle after the lines holding the earlier ones."""
         lines = self.text.splitlines()
         start = 0
         found = None
-        for needle in needles:
+        for k, needle in enumerate(needles):
+            if k and needle == needles[k - 1]:  # the same needle again: its next line
+                start += 1
             pat = re.compile(r"(^|[^\w-])" + re.escape(str(needle)) + r"($|[^\w-])")
             for i in range(start, len(lines)):
-                code = lines[i].split("#", 1)[0]
+                code = nfc(lines[i].split("#", 1)[0])
                 if pat.search(code):
                     found, start = i + 1, i
                     break
@@ -124,6 +225,17 @@ class _Source:
         line = self.line(*(needles or key.split(".")))
         where = f"{self.path}:{line}" if line else str(self.path)
         return CatalogError(f"{where}: {key}: {message}")
+
+    def check_keys(self, key: str, table: dict, known: tuple[str, ...], *needles: str,
+                   what: str = "") -> None:
+        """Refuse a key of `table` (the table `key`) that is not in `known`, naming the
+        close ones (`what`: the kind of key, ``"wall "``)."""
+        for name in table:
+            if name not in known:
+                close = difflib.get_close_matches(name, known, n=2)
+                hint = f"did you mean {' or '.join(map(repr, close))}? " if close else ""
+                raise self.error(f"{key}.{name}".lstrip("."), f"unknown {what}key {name!r} "
+                                 f"({hint}known: {', '.join(known)})", *needles, name)
 
 
 # ---- catalog items ----------------------------------------------------------------------
@@ -163,7 +275,9 @@ class WallSpec:
     """A catalog wall: a `Wall` template plus its id and metadata.
 
     Parametric walls carry only the wall itself (their supports come from the study's
-    diaphragm); test walls carry their own supports (diaphragm ``specimen``).
+    diaphragm, through `urmx.Wall.in_building`); a wall whose table states its supports
+    (test walls, a study's own wall with its own diaphragm) keeps them: it runs on the
+    diaphragm ``specimen`` only. ``own_supports`` names the keys that stated them.
     """
 
     id: str
@@ -172,6 +286,7 @@ class WallSpec:
     source: str = ""
     records: tuple[str, ...] = ()
     parametric: bool = False
+    own_supports: tuple[str, ...] = ()
 
     @property
     def slenderness(self) -> float:
@@ -205,12 +320,24 @@ class Building:
 
     def wall_mass(self, thickness: float, height: float) -> float:
         """Effective wall mass, Eq. 7: 8/15 of both out-of-plane walls' mass. [kg]"""
-        return EFFECTIVE_MASS * 2.0 * self.density * thickness * height * self.wall_length
+        return effective_wall_mass(self.density, thickness, height, self.wall_length)
 
     @property
     def diaphragm_mass(self) -> float:
         """Effective diaphragm mass, Eq. 7: 8/15 of its seismic weight over g. [kg]"""
-        return EFFECTIVE_MASS * self.diaphragm_weight * 1e3 * self.plan_area / PAPER_G
+        return effective_diaphragm_mass(self.diaphragm_weight, self.plan_area)
+
+    def wall(self, spec: WallSpec, diaphragm: Diaphragm, supports: str,
+             damping: float) -> Wall:
+        """A parametric wall of this building on `diaphragm` (`urmx.Wall.in_building`):
+        ``supports`` "top" or "both", `damping` the ratio of each flexible diaphragm. [1]"""
+        w = spec.wall
+        return Wall.in_building(
+            thickness=w.thickness, height=w.height, crack_ratio=w.crack_ratio, pmr=w.pmr,
+            kappa=w.kappa, density=self.density, wall_length=self.wall_length,
+            diaphragm_weight=self.diaphragm_weight, plan_area=self.plan_area,
+            diaphragm_stiffness=diaphragm.stiffness, damping=damping, supports=supports,
+            allow_unusual=w.allow_unusual)
 
     def replace(self, **changes: Any) -> Building:
         d = dict(plan=self.plan, density=self.density, wall_length=self.wall_length,
@@ -234,34 +361,92 @@ class Catalog:
         return [k for k, w in self.walls.items() if w.parametric]
 
 
-def _wall_from_table(src: _Source, key: str, table: dict, **extra: Any) -> Wall:
-    """The `Wall` of a TOML table of wall fields (`extra` fields added); ``key`` is the
-    table's dotted key ("" at the top level). The one TOML-to-Wall loader: catalog walls,
-    study walls and wall files (:func:`read_wall`)."""
-    where = (key.split(".")[-1],) if key else ()
-    unknown = set(table) - set(WALL_FIELDS) - {"name", "source", "records"}
-    if unknown:
-        name = sorted(unknown)[0]
-        raise src.error(f"{key}.{name}".lstrip("."), f"unknown wall key {name!r} (known: "
-                        f"{', '.join(WALL_FIELDS)})", *where, name)
-    values = {k: table[k] for k in WALL_FIELDS if k in table}
+#: a Wall's error names its field first: ``Wall thickness=350 ...``, ``Wall needs mass``,
+#: ``Wall.in_building density=...``
+_WALL_ERROR = re.compile(r"^Wall(?:\.in_building)?:? (?:needs )?(\w+)")
+#: for a wall in building terms: the key that gave each Wall field
+_FROM_BUILDING = {"mass": "density", "top_mass": "diaphragm_weight",
+                  "bottom_mass": "diaphragm_weight", "top_damping": "damping",
+                  "bottom_damping": "damping"}
+
+
+def _wall_from_table(src: _Source, key: str, table: dict, known: tuple[str, ...] = WALL_KEYS,
+                     **extra: Any) -> Wall:
+    """The `Wall` of a TOML table of wall fields or building terms (`extra` fields added);
+    ``key`` is the table's dotted key ("" at the top level). The one TOML-to-Wall loader:
+    catalog walls, study walls and wall files (:func:`read_wall`)."""
+    where = (key,) if key else ()
+    src.check_keys(key, table, known, *where, what="wall ")
+    if any(k in table for k in (*MASS_TERMS, *DIAPHRAGM_TERMS)):
+        return _building_wall(src, key, table)
+    values = {k: table[k] for k in (*WALL_FIELDS, "allow_unusual") if k in table}
     values.update(extra)
+    return _checked_wall(src, key, values, lambda: Wall(**values))
+
+
+def _checked_wall(src: _Source, key: str, values: dict, build, renamed: dict | None = None
+                  ) -> Wall:
+    """``build()`` (a Wall), its errors as a CatalogError naming the key the Wall's
+    message names (`renamed` maps a Wall field to the table key that gave it)."""
+    renamed = renamed or {}
     problem = damping_problem(values)
     if problem:
         bad = problem.split("=", 1)[0]
-        raise src.error(f"{key}.{bad}".lstrip("."), problem, *where, bad)
+        raise src.error(f"{key}.{bad}".lstrip("."), problem, *((key,) if key else ()), bad)
     try:
-        return Wall(**values)
+        return build()
     except (TypeError, ValueError) as exc:
-        bad = next((k for k in WALL_FIELDS if k in str(exc)), None)
+        found = _WALL_ERROR.match(str(exc))
+        bad = renamed.get(found.group(1), found.group(1)) if found else None
+        bad = bad if bad in WALL_KEYS else None
         message = str(exc).replace("Wall.__init__()", "wall")
         raise src.error(f"{key}.{bad}".lstrip(".") if bad else key or "wall", message,
-                        *where, *([bad] if bad else [])) from None
+                        *((key,) if key else ()), *([bad] if bad else [])) from None
+
+
+def _building_wall(src: _Source, key: str, t: dict) -> Wall:
+    """A wall given in building terms: its mass by Eq. 7 from ``density`` and
+    ``wall_length``; with the diaphragm terms, its own diaphragm (`urmx.Wall.in_building`)."""
+    where = (key,) if key else ()
+    mixed = [k for k in ("mass", *SUPPORT_FIELDS) if k in t]
+    if mixed:
+        raise src.error(f"{key}.{mixed[0]}".lstrip("."), "a wall in building terms (density, "
+                        "wall_length, ...) gets its masses and supports from them: give "
+                        f"either those or {mixed[0]}, not both", *where, mixed[0])
+    need = [*MASS_TERMS, "thickness", "height", "crack_ratio"]
+    if any(k in t for k in DIAPHRAGM_TERMS):
+        need += ["diaphragm_weight", "plan_area"]
+        if ("diaphragm_stiffness" in t) == ("diaphragm_frequency" in t):
+            raise src.error(key or "wall", "a wall with its own diaphragm takes exactly one "
+                            "of diaphragm_stiffness [N m-1] and diaphragm_frequency [Hz]",
+                            *where)
+    missing = [k for k in need if k not in t]
+    if missing:
+        raise src.error(f"{key}.{missing[0]}".lstrip("."), "missing (a wall in building "
+                        f"terms needs {', '.join(need)})", *where)
+    for k in (*MASS_TERMS, "thickness", "height"):
+        v = t[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or v <= 0:
+            raise src.error(f"{key}.{k}".lstrip("."), f"{v!r} must be a positive number",
+                            *where, k)
+    fields = {k: t[k] for k in ("thickness", "height", "crack_ratio", "pmr", "kappa",
+                                "allow_unusual") if k in t}
+    if "diaphragm_weight" not in t:
+        mass = effective_wall_mass(t["density"], t["thickness"], t["height"], t["wall_length"])
+        return _checked_wall(src, key, fields, lambda: Wall(mass=mass, **fields),
+                             _FROM_BUILDING)
+    terms = {k: t[k] for k in (*MASS_TERMS, *DIAPHRAGM_TERMS) if k in t}
+    stiff = "diaphragm_stiffness" if "diaphragm_stiffness" in t else "diaphragm_frequency"
+    renamed = dict(_FROM_BUILDING, top_stiffness=stiff, bottom_stiffness=stiff)
+    return _checked_wall(src, key, {**fields, **terms},
+                         lambda: Wall.in_building(**fields, **terms), renamed)
 
 
 def read_wall(path: str | os.PathLike) -> Wall:
-    """A `Wall` from a TOML file: its fields in a ``[wall]`` table or at the top level
-    (``name``, ``source`` and ``records`` may sit beside them, as in ``walls.toml``).
+    """A `Wall` from a TOML file: its fields (or building terms) in a ``[wall]`` table or at
+    the top level (``name``, ``source`` and ``records`` may sit beside them, as in
+    ``walls.toml``).
 
     Raises
     ------
@@ -285,25 +470,30 @@ def read_wall(path: str | os.PathLike) -> Wall:
     return _wall_from_table(src, "wall", src.data["wall"])
 
 
-def _diaphragm_from_table(src: _Source, key: str, ident: str, t: dict) -> Diaphragm:
+def _diaphragm_from_table(src: _Source, key: str, ident: str, t: dict,
+                          known: tuple[str, ...] = DIAPHRAGM_KEYS) -> Diaphragm:
+    if not isinstance(t, dict):
+        raise src.error(key, "must be a table (stiffness, damping, ...)", key)
+    src.check_keys(key, t, known, key)
     if "stiffness" not in t:
-        raise src.error(f"{key}.stiffness", "missing", ident)
+        raise src.error(f"{key}.stiffness", "missing", key)
     k = t["stiffness"]
     if isinstance(k, str):
         if k.strip().lower() != RIGID:
-            raise src.error(f"{key}.stiffness", f'{k!r} is not a number or "rigid"', ident,
+            raise src.error(f"{key}.stiffness", f'{k!r} is not a number or "rigid"', key,
                             "stiffness")
         k = RIGID
     elif isinstance(k, bool) or not isinstance(k, (int, float)) or not math.isfinite(k) \
             or k <= 0:
         raise src.error(f"{key}.stiffness", f"{k!r} must be a positive number [N m-1] or "
-                        '"rigid"', ident, "stiffness")
+                        '"rigid"', key, "stiffness")
     damping = t.get("damping", 0.12)
-    if isinstance(damping, bool) or not isinstance(damping, (int, float)) or damping < 0:
-        raise src.error(f"{key}.damping", f"{damping!r} must be a ratio >= 0", ident, "damping")
+    if isinstance(damping, bool) or not isinstance(damping, (int, float)) \
+            or not math.isfinite(damping) or damping < 0:
+        raise src.error(f"{key}.damping", f"{damping!r} must be a ratio >= 0", key, "damping")
     problem = damping_ratio_problem("damping", damping)
     if problem:
-        raise src.error(f"{key}.damping", problem, ident, "damping")
+        raise src.error(f"{key}.damping", problem, key, "damping")
     return Diaphragm(id=ident, stiffness=k if k == RIGID else float(k), damping=float(damping),
                      description=t.get("description", ""), direction=t.get("direction", ""))
 
@@ -313,44 +503,86 @@ def parametric_wall_id(slenderness: float) -> str:
     return f"s{int(round(slenderness)):02d}"
 
 
+def _table(src: _Source, name: str, label: str, required: tuple[str, ...] = ()) -> dict:
+    """The table `name` of a catalog file, its keys checked against `CATALOG_FILE_KEYS`
+    (`label`) and the `required` ones present."""
+    t = src.data.get(name, {})
+    if not isinstance(t, dict):
+        raise src.error(name, "must be a table", name)
+    src.check_keys(name, t, CATALOG_FILE_KEYS[label], name)
+    for k in required:
+        if k not in t:
+            raise src.error(f"{name}.{k}", "missing", name)
+    return t
+
+
+def _building(src: _Source) -> Building:
+    """The ``[building]`` table of ``building.toml``."""
+    for name in src.data:
+        if name not in ("building", "parametric_walls", "calibration"):
+            raise src.error(name, "unknown table (known: building, parametric_walls, "
+                            "calibration)", name)
+    b = _table(src, "building", "building.toml [building]", ("plan", "density",
+                                                             "wall_length", "diaphragm_weight"))
+    try:
+        plan = tuple(float(x) for x in b["plan"])
+        if len(plan) != 2:
+            raise ValueError
+        values = {k: float(b[k]) for k in ("density", "wall_length", "diaphragm_weight")}
+    except (TypeError, ValueError):
+        raise src.error("building", "plan must be two lengths [m] and density, wall_length, "
+                        "diaphragm_weight numbers", "building") from None
+    return Building(plan=plan, **values)  # type: ignore[arg-type]
+
+
+def _parametric_walls(src: _Source, building: Building) -> dict[str, WallSpec]:
+    """The parametric wall family of ``building.toml`` (``[parametric_walls]``)."""
+    if "parametric_walls" not in src.data:
+        return {}
+    pw = _table(src, "parametric_walls", "building.toml [parametric_walls]",
+                ("thickness", "crack_ratio", "slenderness"))
+    walls = {}
+    for s in _values(src, "parametric_walls.slenderness", pw["slenderness"], float):
+        values = {k: pw[k] for k in ("thickness", "crack_ratio", "pmr", "kappa") if k in pw}
+        t = values["thickness"]
+        if isinstance(t, bool) or not isinstance(t, (int, float)):
+            raise src.error("parametric_walls.thickness", f"{t!r} is not a number",
+                            "parametric_walls", "thickness")
+        t = values["thickness"] = float(t)
+        h = round(s * t, 10)
+        ident = parametric_wall_id(s)
+        wall = _wall_from_table(src, "parametric_walls", {}, **values, height=h,
+                                mass=building.wall_mass(t, h))
+        walls[ident] = WallSpec(ident, wall, name=f"slenderness {s:g}",
+                                source="paper Section 6 (parametric)", parametric=True)
+    return walls
+
+
 def load_catalog(path: str | os.PathLike | None = None) -> Catalog:
     """Load ``walls.toml``, ``diaphragms.toml`` and ``building.toml`` of a catalog folder."""
     root = catalog_dir(path)
     bsrc = _Source(root / "building.toml")
-    b = bsrc.data.get("building", {})
-    try:
-        building = Building(plan=tuple(float(x) for x in b["plan"]), density=float(b["density"]),
-                            wall_length=float(b["wall_length"]),
-                            diaphragm_weight=float(b["diaphragm_weight"]))
-    except KeyError as exc:
-        raise bsrc.error(f"building.{exc.args[0]}", "missing", "building") from None
-    walls: dict[str, WallSpec] = {}
-    pw = bsrc.data.get("parametric_walls", {})
-    for s in pw.get("slenderness", []):
-        t = float(pw["thickness"])
-        h = round(s * t, 10)
-        ident = parametric_wall_id(s)
-        wall = _wall_from_table(bsrc, "parametric_walls", {}, thickness=t, height=h,
-                                crack_ratio=float(pw["crack_ratio"]), pmr=float(pw["pmr"]),
-                                mass=building.wall_mass(t, h))
-        walls[ident] = WallSpec(ident, wall, name=f"slenderness {s:g}",
-                                source="paper Section 6 (parametric)", parametric=True)
+    building = _building(bsrc)
+    walls = _parametric_walls(bsrc, building)
+    calibration = _table(bsrc, "calibration", "building.toml [calibration]")
     wsrc = _Source(root / "walls.toml")
     for ident, t in wsrc.data.items():
         walls[ident] = _wall_spec(wsrc, ident, t)
     dsrc = _Source(root / "diaphragms.toml")
     diaphragms = {ident: _diaphragm_from_table(dsrc, ident, ident, t)
                   for ident, t in dsrc.data.items()}
-    return Catalog(walls, diaphragms, building, dict(bsrc.data.get("calibration", {})), root)
+    return Catalog(walls, diaphragms, building, dict(calibration), root)
 
 
-def _wall_spec(src: _Source, ident: str, t: dict, key: str | None = None) -> WallSpec:
+def _wall_spec(src: _Source, ident: str, t: dict, key: str | None = None,
+               known: tuple[str, ...] = WALL_KEYS) -> WallSpec:
     key = key or ident
     if not isinstance(t, dict):
-        raise src.error(key, "must be a table of wall fields", ident)
-    wall = _wall_from_table(src, key, t)
+        raise src.error(key, "must be a table of wall fields", key)
+    wall = _wall_from_table(src, key, t, known)
+    own = tuple(k for k in (*SUPPORT_FIELDS, *DIAPHRAGM_TERMS) if k in t)
     return WallSpec(ident, wall, name=t.get("name", ident), source=t.get("source", str(src.path)),
-                    records=tuple(t.get("records", ())))
+                    records=tuple(t.get("records", ())), own_supports=own)
 
 
 # ---- studies -----------------------------------------------------------------------------
@@ -369,12 +601,58 @@ class History:
         return f"{self.wall}/{self.diaphragm}/{self.record}/cor{self.cor:g}"
 
 
+@dataclass(frozen=True)
+class OwnRecord:
+    """A record file a study file declares (``[records.<id>]``), before it is read
+    (`urmx.study.samples.resolve_records` reads it, once).
+
+    Parameters
+    ----------
+    id : str
+        Record id: the table's id for a file, ``<table>/<file stem>`` for each file of a
+        folder.
+    path : Path
+        The file, absolute.
+    file : str
+        The file as the study names it, relative to the study file's folder.
+    table : str
+        The ``[records.<table>]`` it comes from.
+    channel, unit, format : str or None
+        As for `urmx.records.describe`.
+    dt : float or None
+        Time step, for files that do not state it. [s]
+    scale : float or None
+        The record's scale factor (1 when None). [1]
+    sha256 : str or None
+        The file's SHA-256 the study pins (a file that differs is refused).
+    allow_unusual : bool
+        Read a record outside the plausible time steps and peaks.
+    override : bool
+        The id is also a records-manifest id, and this file replaces it.
+    """
+
+    id: str
+    path: Path
+    file: str
+    table: str
+    channel: str | None = None
+    dt: float | None = None
+    unit: str | None = None
+    format: str | None = None
+    scale: float | None = None
+    sha256: str | None = None
+    allow_unusual: bool = False
+    override: bool = False
+
+
 @dataclass
 class Study:
     """A study grid read from a TOML file (`load_study`).
 
     ``dims`` maps every grid dimension (``wall``, ``diaphragm``, ``record``, ``cor`` and any
     of ``scale``, ``impact``, ``damping`` the file adds) to its values, in `DIMS` order.
+    ``own_records`` holds the record files the study declares (``[records.<id>]``) by
+    record id; every other record id is one of the records manifest.
     """
 
     name: str
@@ -397,6 +675,7 @@ class Study:
     tables: dict[str, Any] = field(default_factory=dict)  # [study.<kind>] tables, as data
     kind: str = "grid"  # the study kind (urmx.study.kinds) its tables make it
     settings: Any = None  # the kind's settings, parsed from its table
+    own_records: dict[str, OwnRecord] = field(default_factory=dict)
     _src: Any = field(default=None, repr=False)
 
     @property
@@ -429,8 +708,11 @@ class Study:
     def wall(self, spec: WallSpec, diaphragm: Diaphragm, damping: float | None = None) -> Wall:
         """The `Wall` of one cell: a catalog wall on a diaphragm as the study's supports say.
 
-        ``damping`` (the study's ``damping`` dimension) replaces the damping ratio of every
-        flexible support.
+        On ``specimen`` the wall stands on its own supports; a parametric wall on a
+        diaphragm is the building's wall (`Building.wall`, `urmx.Wall.in_building`); any
+        other wall gets the diaphragm's stiffness and damping with the building's diaphragm
+        mass. ``damping`` (the study's ``damping`` dimension) replaces the damping ratio of
+        every flexible support.
         """
         supports = self.supports_of(diaphragm)
         if supports == SPECIMEN:
@@ -439,8 +721,10 @@ class Study:
                 w = w.replace(bottom_damping=0.0 if w.bottom_rigid else damping,
                               top_damping=0.0 if w.top_rigid else damping)
             return w
-        md = self.catalog.building.diaphragm_mass
         zeta = diaphragm.damping if damping is None else damping
+        if spec.parametric:
+            return self.catalog.building.wall(spec, diaphragm, supports, zeta)
+        md = self.catalog.building.diaphragm_mass
         zeta = 0.0 if diaphragm.rigid else zeta
         top = dict(top_stiffness=diaphragm.stiffness, top_mass=md, top_damping=zeta)
         if supports == "top":  # single storey: the ground is the rigid bottom support
@@ -456,19 +740,45 @@ class Study:
         return self._src.error(key, message, *needles)
 
 
+def _number(value: Any) -> bool:
+    """Whether `value` is a finite number (not a bool)."""
+    return not isinstance(value, bool) and isinstance(value, (int, float)) \
+        and math.isfinite(value)
+
+
+def _range(src: _Source, key: str, value: dict) -> list[float]:
+    """The values of a ``{start, stop, step}`` range (stop included), counted before they
+    are made: more than `urmx.study.limits.MAX_VALUES` is refused."""
+    from .study.limits import MAX_VALUES
+
+    needle = key.split(".")[-1]
+    src.check_keys(key, value, ("start", "stop", "step"), needle)
+    missing = [k for k in ("start", "stop", "step") if k not in value]
+    if missing:
+        raise src.error(key, f"range needs start, stop and step (missing {missing[0]})",
+                        needle)
+    bad = next((k for k in ("start", "stop", "step") if not _number(value[k])), None)
+    if bad:
+        raise src.error(key, f"range {bad}={value[bad]!r} is not a finite number", needle)
+    start, stop, step = (float(value[k]) for k in ("start", "stop", "step"))
+    if step <= 0:
+        raise src.error(key, "range step must be positive", needle)
+    count = (stop - start) / step + 1e-9
+    if not count < MAX_VALUES:  # inf and NaN too
+        raise src.error(key, f"range start={start:g}, stop={stop:g}, step={step:g} makes "
+                        f"{count:.3g} values, more than the {MAX_VALUES:,} a dimension may "
+                        "hold (urmx.study.limits.MAX_VALUES): is the step in the intended "
+                        "unit?", needle)
+    n = int(math.floor(count)) + 1
+    decimals = max(0, -int(math.floor(math.log10(step))) + 3)
+    return [round(start + i * step, decimals) for i in range(max(n, 0))]
+
+
 def _values(src: _Source, key: str, value: Any, kind: type) -> list:
-    """A dimension's values: a list, a scalar, or {start, stop, step} (stop included)."""
+    """A dimension's values: a list, a scalar, or {start, stop, step} (stop included);
+    string ids in NFC."""
     if isinstance(value, dict):
-        try:
-            start, stop, step = (float(value[k]) for k in ("start", "stop", "step"))
-        except KeyError as exc:
-            raise src.error(key, f"range needs start, stop and step (missing {exc.args[0]})",
-                            key.split(".")[-1]) from None
-        if step <= 0:
-            raise src.error(key, "range step must be positive", key.split(".")[-1])
-        n = int(math.floor((stop - start) / step + 1e-9)) + 1
-        decimals = max(0, -int(math.floor(math.log10(step))) + 3)
-        values = [round(start + i * step, decimals) for i in range(max(n, 0))]
+        values: list = _range(src, key, value)
     elif isinstance(value, list):
         values = value
     else:
@@ -479,13 +789,13 @@ def _values(src: _Source, key: str, value: Any, kind: type) -> list:
     out = []
     for v in values:
         if kind is float:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise src.error(key, f"{v!r} is not a number", key.split(".")[-1])
+            if not _number(v):
+                raise src.error(key, f"{v!r} is not a finite number", key.split(".")[-1])
             out.append(float(v))
         else:
             if not isinstance(v, str):
                 raise src.error(key, f"{v!r} is not a string id", key.split(".")[-1])
-            out.append(v)
+            out.append(nfc(v))
     if len(set(out)) != len(out):
         raise src.error(key, "has repeated values", key.split(".")[-1])
     return out
@@ -504,12 +814,6 @@ def study_path(name: str | os.PathLike, catalog: str | os.PathLike | None = None
     return found
 
 
-#: keys of the ``[study]`` table itself (a registered kind's table may sit beside them)
-STUDY_KEYS = ("name", "title", "description", "walls", "diaphragms", "supports", "records",
-              "cor", "scale", "impact", "damping", "tail", "scale_factor", "pairs", "history",
-              "catalog")
-
-
 def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Study:
     """Read and validate a study file (before any computation).
 
@@ -524,8 +828,11 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     Raises
     ------
     CatalogError
-        Naming the file, the key and the line: unknown ids, empty dimensions, bad values,
-        a ``[study.<kind>]`` table no registered kind reads or that its kind refuses.
+        Naming the file, the key and the line: unknown ids or keys, empty dimensions, bad
+        values (those the kernel would refuse included), a range of too many values, an own
+        item with a catalog id and no ``override = true``, a wall with its own supports on
+        listed diaphragms, a missing record file, a ``[study.<kind>]`` table no registered
+        kind reads or that its kind refuses.
     """
     from .study import kinds
 
@@ -542,27 +849,31 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
         raise src.error("study.supports", f"{supports!r} is not one of {SUPPORTS}", "supports")
     wall_ids = (cat.parametric_walls if s["walls"] == "parametric"
                 else _values(src, "study.walls", s["walls"], str))
-    walls = _study_walls(src, cat, wall_ids)
+    walls = _study_walls(src, cat, wall_ids, supports)
     diaphragms, own_supports = _study_diaphragms(src, cat, s["diaphragms"], supports)
-    records = _values(src, "study.records", s["records"], str)
+    own, groups = _own_records(src)
+    records = _record_ids(src, "study.records", s["records"], groups)
+    _unused_records(src, groups, records)
     cor = _values(src, "study.cor", s["cor"], float)
     for c in cor:
-        if not 0.0 <= c <= 1.0:
-            raise src.error("study.cor", f"{c!r} must lie in [0, 1]", "cor")
+        if not 0.0 < c <= 1.0:
+            raise src.error("study.cor", f"{c!r} must lie in (0, 1] (the kernel refuses a "
+                            "coefficient of restitution of 0)", "cor")
     extra, impact = _added_dimensions(src, s)
     tail = s.get("tail", 0.0)
-    if isinstance(tail, bool) or not isinstance(tail, (int, float)) or tail < 0:
-        raise src.error("study.tail", f"{tail!r} must be a duration >= 0 [s]", "tail")
+    if not _number(tail) or tail < 0:
+        raise src.error("study.tail", f"{tail!r} must be a finite duration >= 0 [s]", "tail")
     study = Study(name=s.get("name", src.path.stem), title=s.get("title", s.get("name", "")),
                   path=src.path, text=src.text, catalog=cat, walls=walls,
                   diaphragms=diaphragms, supports=supports, records=records, cor=cor,
                   extra=extra, impact=impact, tail=float(tail),
-                  scale_factor=_scale_factors(src, s, records),
-                  pairs=_pairs(src, s, wall_ids, records), own_supports=own_supports,
-                  tables={k: s[k] for k in kinds.tables() if k in s}, _src=src)
-    study.histories = _histories(src, study, s.get("history", []))
-    study.kind, study.settings = kinds.prepare(study)
+                  scale_factor=_scale_factors(src, s, records, own, groups),
+                  pairs=_pairs(src, s, wall_ids, records, groups), own_supports=own_supports,
+                  tables={k: s[k] for k in kinds.tables() if k in s},
+                  own_records={r: own[r] for r in records if r in own}, _src=src)
+    study.histories = _histories(src, study, s.get("history", []), groups)
     _check_cells(src, study)
+    study.kind, study.settings = kinds.prepare(study)
     return study
 
 
@@ -573,33 +884,66 @@ def _study_table(src: _Source, tables: tuple[str, ...]) -> dict:
     s = data.get("study")
     if not isinstance(s, dict):
         raise src.error("study", "missing [study] table")
-    known = {*STUDY_KEYS, *tables}
-    for k in s:
-        if k not in known:
-            raise src.error(f"study.{k}", f"unknown key (known: {', '.join(sorted(known))})", k)
+    src.check_keys("study", s, (*STUDY_KEYS, *tables), "study")
     for k in data:
-        if k not in ("study", "walls", "diaphragms"):
-            raise src.error(k, "unknown table (known: study, walls, diaphragms)", k)
+        if k not in ("study", "walls", "diaphragms", "records"):
+            raise src.error(k, "unknown table (known: study, walls, diaphragms, records)", k)
+        if not isinstance(data[k], dict):
+            raise src.error(k, "must be a table", k)
     return s
+
+
+def _override(src: _Source, key: str, t: dict, catalog_ids: Any, what: str) -> None:
+    """An own item (`key`) whose id is a catalog id needs ``override = true``; an
+    ``override`` of an id the catalog lacks is refused too."""
+    ident = key.split(".", 1)[1]
+    override = t.get("override", False)
+    if not isinstance(override, bool):
+        raise src.error(f"{key}.override", f"{override!r} must be true or false", key,
+                        "override")
+    if ident in catalog_ids and not override:
+        raise src.error(key, f"{ident!r} is already a {what} of the catalog: choose another "
+                        f"id, or set override = true in [{key}] to replace the catalog's "
+                        f"{what} in this study", key)
+    if override and ident not in catalog_ids:
+        raise src.error(f"{key}.override", f"the catalog has no {what} {ident!r} to "
+                        "override: remove override = true", key, "override")
 
 
 def _study_catalog(src: _Source, catalog: str | os.PathLike | None) -> Catalog:
     """The catalog, extended by the study file's own walls and diaphragms."""
     cat = load_catalog(catalog)
+    wall_keys = STUDY_FILE_KEYS["[walls.<id>]"]
     for ident, t in src.data.get("walls", {}).items():
-        cat.walls[ident] = _wall_spec(src, ident, t, key=f"walls.{ident}")
+        key = f"walls.{ident}"
+        if isinstance(t, dict):
+            _override(src, key, t, cat.walls, "wall")
+        cat.walls[ident] = _wall_spec(src, ident, t, key=key, known=wall_keys)
     for ident, t in src.data.get("diaphragms", {}).items():
-        cat.diaphragms[ident] = _diaphragm_from_table(src, f"diaphragms.{ident}", ident, t)
+        key = f"diaphragms.{ident}"
+        if isinstance(t, dict):
+            _override(src, key, t, cat.diaphragms, "diaphragm")
+        cat.diaphragms[ident] = _diaphragm_from_table(src, key, ident, t,
+                                                      STUDY_FILE_KEYS["[diaphragms.<id>]"])
     return cat
 
 
-def _study_walls(src: _Source, cat: Catalog, wall_ids: list[str]) -> list[WallSpec]:
+def _study_walls(src: _Source, cat: Catalog, wall_ids: list[str], supports: str
+                 ) -> list[WallSpec]:
+    """The study's walls; a wall that states its own supports runs on ``specimen`` only."""
     walls = []
     for w in wall_ids:
         if w not in cat.walls:
             raise src.error("study.walls", f"unknown wall id {w!r} (known: "
                             f"{', '.join(cat.walls)})", "walls", w)
-        walls.append(cat.walls[w])
+        spec = cat.walls[w]
+        if spec.own_supports and supports != SPECIMEN:
+            raise src.error("study.walls", f"wall {w!r} states its own supports "
+                            f"({', '.join(spec.own_supports)}): it keeps them only in a study "
+                            'with supports = "specimen" and diaphragms = ["specimen"]; to put '
+                            "it on the listed diaphragms, leave those keys out of its table",
+                            "walls", w)
+        walls.append(spec)
     return walls
 
 
@@ -618,8 +962,10 @@ def _study_diaphragms(src: _Source, cat: Catalog, value: Any, supports: str
     for label in _values(src, "study.diaphragms", value, str):
         d, _, own = label.partition("/")
         if d not in cat.diaphragms:
+            hint = (' (the walls\' own supports: supports = "specimen")' if d == SPECIMEN
+                    else "")
             raise src.error("study.diaphragms", f"unknown diaphragm id {d!r} (known: "
-                            f"{', '.join(cat.diaphragms)})", "diaphragms", label)
+                            f"{', '.join(cat.diaphragms)}){hint}", "diaphragms", label)
         if own and own not in ("top", "both"):
             raise src.error("study.diaphragms", f"{label!r}: the supports after '/' must "
                             'be "top" or "both"', "diaphragms", label)
@@ -629,6 +975,123 @@ def _study_diaphragms(src: _Source, cat: Catalog, value: Any, supports: str
         else:
             diaphragms.append(cat.diaphragms[d])
     return diaphragms, own_supports
+
+
+# ---- a study's own record files ([records.<id>]) ------------------------------------------
+
+def _own_records(src: _Source) -> tuple[dict[str, OwnRecord], dict[str, list[str]]]:
+    """(the study file's own records by id, the record ids of each ``[records.<id>]``
+    table: its own id for a file, one id per file for a folder)."""
+    own: dict[str, OwnRecord] = {}
+    groups: dict[str, list[str]] = {}
+    for table, t in src.data.get("records", {}).items():
+        key = f"records.{table}"
+        if not isinstance(t, dict):
+            raise src.error(key, "must be a table (file = ... or folder = ...)", key)
+        src.check_keys(key, t, RECORD_KEYS, key)
+        options = _record_options(src, key, t)
+        if ("file" in t) == ("folder" in t):
+            raise src.error(key, "needs exactly one of file = \"...\" (one record) and "
+                            "folder = \"...\" (one record per file)", key)
+        files = _record_files(src, key, table, t)
+        for rid, (path, name) in files.items():
+            if rid in own:
+                raise src.error(key, f"record id {rid!r} is made twice (also by "
+                                f"[records.{own[rid].table}])", key)
+            own[rid] = OwnRecord(rid, path, name, table, **options)
+        groups[table] = list(files)
+    return own, groups
+
+
+def _record_options(src: _Source, key: str, t: dict) -> dict[str, Any]:
+    """The reading options of a ``[records.<id>]`` table, checked."""
+    from .records.readers import UNIT_FACTORS
+
+    out: dict[str, Any] = {}
+    for k in ("channel", "format", "unit", "sha256", "pattern", "file", "folder"):
+        if k in t and not isinstance(t[k], str):
+            raise src.error(f"{key}.{k}", f"{t[k]!r} must be a string", key, k)
+    for k in ("allow_unusual", "override"):
+        if k in t and not isinstance(t[k], bool):
+            raise src.error(f"{key}.{k}", f"{t[k]!r} must be true or false", key, k)
+    for k in ("dt", "scale"):
+        if k in t and (not _number(t[k]) or t[k] <= 0):
+            unit = "[s]" if k == "dt" else "[1]"
+            raise src.error(f"{key}.{k}", f"{t[k]!r} must be a positive, finite number "
+                            f"{unit}", key, k)
+    if "unit" in t and t["unit"] not in UNIT_FACTORS:
+        raise src.error(f"{key}.unit", f"{t['unit']!r} is not one of {sorted(UNIT_FACTORS)}",
+                        key, "unit")
+    if "sha256" in t:
+        if "folder" in t:
+            raise src.error(f"{key}.sha256", "pins one file: give it in a [records.<id>] "
+                            "table with file = ...", key, "sha256")
+        if not re.fullmatch(r"[0-9a-fA-F]{64}", t["sha256"]):
+            raise src.error(f"{key}.sha256", f"{t['sha256']!r} is not a SHA-256 (64 hex "
+                            "digits)", key, "sha256")
+    if "pattern" in t and "folder" not in t:
+        raise src.error(f"{key}.pattern", "is for a folder = ... table", key, "pattern")
+    for k in ("channel", "dt", "unit", "format", "allow_unusual", "override"):
+        if k in t:
+            out[k] = t[k]
+    if "scale" in t:
+        out["scale"] = float(t["scale"])
+    if "sha256" in t:
+        out["sha256"] = t["sha256"].lower()
+    return out
+
+
+def _record_files(src: _Source, key: str, table: str, t: dict) -> dict[str, tuple[Path, str]]:
+    """Record id -> (absolute file, the name the study gives it) of a ``[records.<id>]``
+    table: its file, or each file of its folder matching ``pattern`` (``*`` by default;
+    hidden files and ``manifest.toml`` left out), as ``<id>/<file stem>``, in name order."""
+    base = src.path.parent
+    if "file" in t:
+        path = base / t["file"]
+        if not path.is_file():
+            raise src.error(f"{key}.file", f"{str(path)!r} does not exist (a file is named "
+                            "relative to the study file's folder)", key, "file")
+        return {table: (path.absolute(), t["file"])}
+    folder = base / t["folder"]
+    if not folder.is_dir():
+        raise src.error(f"{key}.folder", f"{str(folder)!r} is not a folder (named relative "
+                        "to the study file's folder)", key, "folder")
+    pattern = t.get("pattern", "*")
+    files = sorted(p for p in folder.glob(pattern) if p.is_file()
+                   and not p.name.startswith(".") and p.name != "manifest.toml")
+    if not files:
+        raise src.error(key, f"no file of {str(folder)!r} matches pattern {pattern!r}", key)
+    out: dict[str, tuple[Path, str]] = {}
+    for f in files:
+        rid = f"{table}/{nfc(f.stem)}"
+        if rid in out:
+            raise src.error(key, f"{out[rid][1]!r} and {f.name!r} both make record id "
+                            f"{rid!r} (one id per file stem): narrow the pattern", key)
+        rel = f.relative_to(folder).as_posix()
+        out[rid] = (f.absolute(), f"{Path(t['folder']).as_posix()}/{rel}")
+    return out
+
+
+def _record_ids(src: _Source, key: str, value: Any, groups: dict[str, list[str]]
+                ) -> list[str]:
+    """Record ids of `key`: the id of a ``[records.<id>]`` table stands for each of its
+    records (every file of a folder)."""
+    ids: list[str] = []
+    for r in _values(src, key, value, str):
+        for rid in groups.get(r, [r]):
+            if rid in ids:
+                raise src.error(key, f"record {rid!r} is named twice", key.split(".")[-1], r)
+            ids.append(rid)
+    return ids
+
+
+def _unused_records(src: _Source, groups: dict[str, list[str]], records: list[str]) -> None:
+    """A ``[records.<id>]`` table none of whose records the study runs is refused."""
+    for table, ids in groups.items():
+        if not any(r in records for r in ids):
+            raise src.error(f"records.{table}", f"declared but study.records does not name "
+                            f"{table!r}: add it to study.records, or remove the table",
+                            f"records.{table}")
 
 
 def _added_dimensions(src: _Source, s: dict) -> tuple[dict[str, list], str]:
@@ -645,43 +1108,59 @@ def _added_dimensions(src: _Source, s: dict) -> tuple[dict[str, list], str]:
             extra["impact"] = laws
         else:
             impact = laws[0]
-    for k in ("scale", "damping"):
-        if k in s:
-            vals = _values(src, f"study.{k}", s[k], float)
-            if any(v < 0 for v in vals):
-                raise src.error(f"study.{k}", "values must not be negative", k)
-            if k == "damping":
-                problem = next(filter(None, (damping_ratio_problem("damping", v)
-                                             for v in vals)), None)
-                if problem:
-                    raise src.error("study.damping", problem, "damping")
-            extra[k] = vals
+    if "scale" in s:
+        vals = _values(src, "study.scale", s["scale"], float)
+        if any(v <= 0 for v in vals):
+            bad = next(v for v in vals if v <= 0)
+            raise src.error("study.scale", f"{bad!r}: a scale must be positive (0 analyses "
+                            "no motion, a negative one the record turned over)", "scale")
+        extra["scale"] = vals
+    if "damping" in s:
+        vals = _values(src, "study.damping", s["damping"], float)
+        if any(v < 0 for v in vals):
+            raise src.error("study.damping", "values must not be negative", "damping")
+        problem = next(filter(None, (damping_ratio_problem("damping", v) for v in vals)), None)
+        if problem:
+            raise src.error("study.damping", problem, "damping")
+        extra["damping"] = vals
     return {k: extra[k] for k in DIMS if k in extra}, impact
 
 
-def _scale_factors(src: _Source, s: dict, records: list[str]) -> dict[str, float]:
+def _scale_factors(src: _Source, s: dict, records: list[str], own: dict[str, OwnRecord],
+                   groups: dict[str, list[str]]) -> dict[str, float]:
+    table = s.get("scale_factor", {})
+    if not isinstance(table, dict):
+        raise src.error("study.scale_factor", "must be a table of record id = factor",
+                        "scale_factor")
     scale_factor = {}
-    for r, f in s.get("scale_factor", {}).items():
-        if r not in records:
-            raise src.error(f"study.scale_factor.{r}", "names a record the study does not "
-                            "list", "scale_factor", r)
-        if isinstance(f, bool) or not isinstance(f, (int, float)) or f <= 0:
-            raise src.error(f"study.scale_factor.{r}", f"{f!r} must be a positive number",
-                            "scale_factor", r)
-        scale_factor[r] = float(f)
+    for r, f in table.items():
+        key = f"study.scale_factor.{r}"
+        if not _number(f) or f <= 0:
+            raise src.error(key, f"{f!r} must be a positive, finite number", "scale_factor", r)
+        for rid in groups.get(r, [r]):
+            if rid not in records:
+                raise src.error(key, "names a record the study does not list",
+                                "scale_factor", r)
+            if rid in own and own[rid].scale is not None:
+                raise src.error(key, f"record {rid!r} has its scale in [records."
+                                f"{own[rid].table}] already: give it in one place",
+                                "scale_factor", r)
+            scale_factor[rid] = float(f)
     return scale_factor
 
 
-def _pairs(src: _Source, s: dict, wall_ids: list[str], records: list[str]
-           ) -> dict[str, list[str]] | None:
+def _pairs(src: _Source, s: dict, wall_ids: list[str], records: list[str],
+           groups: dict[str, list[str]]) -> dict[str, list[str]] | None:
     if "pairs" not in s:
         return None
+    if not isinstance(s["pairs"], dict):
+        raise src.error("study.pairs", "must be a table of wall id = [record ids]", "pairs")
     pairs = {}
     for w, rs in s["pairs"].items():
         if w not in wall_ids:
             raise src.error(f"study.pairs.{w}", "names a wall the study does not list",
                             "pairs", w)
-        rs = _values(src, f"study.pairs.{w}", rs, str)
+        rs = _record_ids(src, f"study.pairs.{w}", rs, groups)
         for r in rs:
             if r not in records:
                 raise src.error(f"study.pairs.{w}", f"record {r!r} is not in study.records",
@@ -702,17 +1181,27 @@ def _check_cells(src: _Source, study: Study) -> None:
                                     "walls") from None
 
 
-def _histories(src: _Source, study: Study, entries: list) -> list[History]:
+def _histories(src: _Source, study: Study, entries: Any, groups: dict[str, list[str]]
+               ) -> list[History]:
     if isinstance(entries, dict):
         entries = [entries]
+    if not isinstance(entries, list):
+        raise src.error("study.history", "must be [[study.history]] tables", "history")
     out: list[History] = []
     dims = study.dims
+    known = STUDY_FILE_KEYS["[[study.history]]"]
     for i, e in enumerate(entries):
         key = f"study.history[{i}]"
+        if not isinstance(e, dict):
+            raise src.error(key, "must be a table (wall, diaphragm, record, cor)", "history")
+        src.check_keys(key, e, known, *(["study.history"] * (i + 1)))
         sel = {}
-        for dim in ("wall", "diaphragm", "record", "cor"):
+        for dim in known:
             v = e.get(dim, dims[dim])
             v = v if isinstance(v, list) else [v]
+            v = [nfc(x) if isinstance(x, str) else x for x in v]
+            if dim == "record":
+                v = [rid for x in v for rid in groups.get(x, [x])]
             for x in v:
                 if x not in dims[dim]:
                     raise src.error(f"{key}.{dim}", f"{x!r} is not in the study's {dim} "

@@ -1,4 +1,12 @@
-"""Settings: where the record files live.
+"""Settings: where the record files live, and where urmx's own data (the catalog and the
+record manifest) and a source checkout are.
+
+urmx's data (``catalog/`` and ``records/manifest.toml``) has one source, the top-level
+folders of the source checkout; a built wheel carries a copy of them as package data
+(``urmx/_data/``, copied there at build time by ``setup.py``), read with
+`importlib.resources`. :func:`data_dir` gives the checkout's folder when urmx runs from a
+checkout (an editable install), else the packaged copy. Outputs never go into the package:
+reports and archives default to the current folder.
 
 The records directory is, in order: the ``records_dir`` argument, the ``URMX_RECORDS``
 environment variable, or ``records_dir`` in ``urmx.toml`` in the current directory (a
@@ -10,6 +18,7 @@ from __future__ import annotations
 
 import os
 import sys
+from importlib import resources
 from pathlib import Path
 
 from .errors import InputError, MissingFileError
@@ -26,9 +35,46 @@ class UrmxWarning(UserWarning):
     """Warnings urmx itself raises (e.g. an unevenly sampled record was resampled)."""
 
 
+#: where a wheel carries urmx's data (``setup.py`` copies ``catalog/`` and
+#: ``records/manifest.toml`` there at build time)
+PACKAGED = "_data"
+
+
 def project_root() -> Path:
-    """The source checkout (the folder holding catalog/, records/, reports/)."""
+    """The folder above the package: the source checkout (holding catalog/, records/,
+    reports/) when urmx runs from one, else the folder it is installed in
+    (site-packages); see :func:`checkout`."""
     return Path(__file__).resolve().parent.parent
+
+
+def checkout() -> Path | None:
+    """The source checkout urmx runs from (an editable install or ``PYTHONPATH``), or None
+    for an installed wheel: the folder above the package when it holds ``pyproject.toml``
+    and ``catalog/``."""
+    root = project_root()
+    return root if (root / "pyproject.toml").is_file() and (root / "catalog").is_dir() else None
+
+
+def need_checkout(what: str) -> Path:
+    """The source checkout, or a one-line `MissingFileError` saying that `what` needs one."""
+    root = checkout()
+    if root is None:
+        raise MissingFileError(f"{what} needs a source checkout of urmx (this urmx is "
+                               f"installed in {project_root()}); run it from a clone of the "
+                               "repository with `pip install -e .`")
+    return root
+
+
+def data_dir(name: str) -> Path:
+    """urmx's data folder `name` (``catalog`` or ``records``): the checkout's top-level
+    folder when urmx runs from a checkout, else the copy a wheel carries as package data
+    (``urmx/_data/<name>``, found with `importlib.resources`)."""
+    root = checkout()
+    if root is not None:
+        return root / name
+    packaged = resources.files("urmx").joinpath(PACKAGED, name)
+    # a wheel installs as files, so the resource is a path; a zipped urmx is not supported
+    return packaged if isinstance(packaged, Path) else Path(str(packaged))
 
 
 def _config_records_dir(cfg: Path) -> tuple[Path | None, str]:

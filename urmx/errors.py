@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 
@@ -39,9 +40,12 @@ class RunError(UrmxError, RuntimeError):
     reached, or the cluster lost its workers."""
 
 
-def check_output(path: str | os.PathLike, what: str = "--out", *,
-                 folder: bool = False) -> Path:
-    """Check, before any work, that an output file (or folder) can be written.
+def check_output(path: str | os.PathLike, what: str = "--out", *, folder: bool = False,
+                 inputs: Iterable[tuple[str, str | os.PathLike]] = (),
+                 utf8: bool = False) -> Path:
+    """Check, before any work, that an output file (or folder) can be written, and return
+    it resolved (``~``, symbolic links and ``..`` as the operating system follows them), so
+    that the work writes exactly where the check looked.
 
     Parameters
     ----------
@@ -51,32 +55,77 @@ def check_output(path: str | os.PathLike, what: str = "--out", *,
         How the user named it (an option or argument), for the message.
     folder : bool
         Whether `path` is a folder to create or reuse.
+    inputs : iterable of (str, path)
+        The run's input files, each with what it is (``("the study file", path)``): an
+        output that is one of them (the same file, by any name) is refused, so an input
+        never becomes an output.
+    utf8 : bool
+        Refuse a name that is not valid UTF-8 (netCDF file names must be).
 
     Returns
     -------
     pathlib.Path
+        The resolved path.
 
     Raises
     ------
     OutputError
         `path` is a folder where a file is wanted (or the reverse), a parent of it is a
-        file, or its nearest existing parent folder is not writable.
+        file, it is one of the `inputs`, its name is not UTF-8 (with `utf8`), or a test
+        file cannot be written and removed in its nearest existing folder (no permission,
+        a read-only or full disk).
     """
-    p = Path(path).expanduser()
+    given = Path(path).expanduser()
+    p = Path(os.path.realpath(given))
+    if utf8:
+        try:
+            str(p).encode("utf-8")
+        except UnicodeEncodeError:
+            raise OutputError(f"{what} {str(given)!r} cannot be written: its name is not "
+                              "valid UTF-8 (netCDF file names must be); give another "
+                              "name") from None
     if folder and p.exists() and not p.is_dir():
-        raise OutputError(f"{what} {str(p)!r} is a file, not a folder")
+        raise OutputError(f"{what} {str(given)!r} is a file, not a folder")
     if not folder and p.is_dir():
-        raise OutputError(f"{what} {str(p)!r} is a folder; give a file name")
+        raise OutputError(f"{what} {str(given)!r} is a folder; give a file name")
+    for label, source in inputs:
+        if p.exists() and _same_file(p, source):
+            raise OutputError(f"{what} {str(given)!r} is {label} {str(source)!r}: an input "
+                              "is never overwritten; give another output file")
     base = p if folder else p.parent
     while not base.exists() and base != base.parent:
         base = base.parent
     if not base.is_dir():
-        raise OutputError(f"{what} {str(p)!r} cannot be written: {str(base)!r} is a file, "
-                          "not a folder")
-    if not os.access(base, os.W_OK | os.X_OK):
-        raise OutputError(f"{what} {str(p)!r} cannot be written: no permission to write in "
-                          f"{str(base)!r}")
+        raise OutputError(f"{what} {str(given)!r} cannot be written: {str(base)!r} is a "
+                          "file, not a folder")
+    _probe(base, f"{what} {str(given)!r}")
     return p
+
+
+def _same_file(a: Path, b: str | os.PathLike) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
+
+
+def _probe(folder: Path, named: str) -> None:
+    """Write a small test file in `folder`, flush it to disk and remove it."""
+    probe = folder / f".urmx-probe-{os.getpid()}"
+    try:
+        fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        try:
+            os.write(fd, b"urmx output check\n")
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+        raise OutputError(f"{named} cannot be written: a test file in {str(folder)!r} "
+                          f"failed: {reason}") from None
+    finally:
+        with contextlib.suppress(OSError):
+            probe.unlink()
 
 
 @contextlib.contextmanager

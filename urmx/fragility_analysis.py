@@ -1,7 +1,9 @@
 """Reductions of IDA archives (`urmx.study.kinds.ida`): supports groups, the resonance of
-capacities with the diaphragm's frequency, the effect of stiffening a diaphragm and the rank
-correlation of collapse intensities with slenderness (drawn by `urmx.plot`, reported by
-`urmx.fragility_report`)."""
+capacities with the diaphragm's frequency, the effect of stiffening a diaphragm, the rank
+correlation of collapse intensities with slenderness, and, from the capacities in every
+intensity measure that one run holds, the efficiency and sufficiency of each measure and the
+collapse risk at a site (drawn by `urmx.plot`, reported by `urmx.fragility_report` and
+`urmx risk`)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .analysis import spearman
+from .fragility.fits import CONFIDENCE
 
 GROUPS = {"top": "single storey (diaphragm on top, ground below)",
           "both": "higher storey (between two diaphragms alike)"}
@@ -114,3 +117,261 @@ def slenderness_ranks(d: xr.Dataset) -> dict:
     return {"rho": rho, "rho_record": rho_rec,
             "stocky": d.wall.values[np.argmin(d.slenderness.values)],
             "slender": d.wall.values[np.argmax(d.slenderness.values)]}
+
+
+# ---- every measure from one run: efficiency, sufficiency, confidence, risk --------------------
+
+#: the measures compared (`urmx.fragility.RECORD_IMS`)
+MEASURES = ("pga", "pgv", "sa_wall", "sa_diaphragm", "sa_avg")
+
+
+def require_measures(ds: xr.Dataset) -> None:
+    """Refuse an IDA archive written before it held the scale factor at collapse and each
+    record's intensity in every measure."""
+    from .errors import InputError
+
+    missing = [n for n in ("collapse_scale", *(f"record_{im}" for im in MEASURES))
+               if n not in ds]
+    if missing:
+        raise InputError(f"the IDA archive lacks {', '.join(missing)} (written by an older "
+                         "urmx): run the study again with `urmx ida` to write them")
+
+
+def capacities(ds: xr.Dataset, im: str) -> xr.DataArray:
+    """Collapse capacities in measure `im`: the scale factor at collapse times each
+    record's intensity in `im` (no new analyses), with the units and name of the measure."""
+    from .fragility import IM_ATTRS
+
+    require_measures(ds)
+    if im not in MEASURES:
+        from .errors import InputError
+
+        raise InputError(f"im={im!r}: use one of {', '.join(MEASURES)}")
+    cap = ds.collapse_scale * ds[f"record_{im}"]
+    units, name = IM_ATTRS[im]
+    return cap.rename(f"collapse_{im}").assign_attrs(units=units,
+                                                     long_name=f"collapse intensity ({name})")
+
+
+def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None) -> xr.Dataset:
+    """Lognormal fits (with bootstrap intervals) of the capacities in `im` per (wall,
+    diaphragm) at the first COR: ``median_collapse_intensity``, ``dispersion`` and their
+    ``_lower`` / ``_upper`` bounds. [units of `im`], [1]"""
+    from .fragility import RESAMPLES, fit_lognormal
+
+    d = first_cor(ds)
+    cap = capacities(d, im).transpose("wall", "diaphragm", "record").values
+    cen = d.censored.transpose("wall", "diaphragm", "record").values
+    names = ("median_collapse_intensity", "median_collapse_intensity_lower",
+             "median_collapse_intensity_upper", "dispersion", "dispersion_lower",
+             "dispersion_upper")
+    out = {n: np.full(cap.shape[:2], np.nan) for n in names}
+    for iw, idp in np.ndindex(cap.shape[:2]):
+        ran = np.isfinite(cap[iw, idp])
+        try:
+            f = fit_lognormal(cap[iw, idp, ran], cen[iw, idp, ran],
+                              resamples=RESAMPLES if resamples is None else resamples)
+        except ValueError:
+            continue
+        for n, v in zip(names, (f.median, *f.median_ci, f.dispersion, *f.dispersion_ci),
+                        strict=True):
+            out[n][iw, idp] = v
+    return xr.Dataset({n: (("wall", "diaphragm"), v) for n, v in out.items()},
+                      coords={"wall": d.wall, "diaphragm": d.diaphragm})
+
+
+def efficiency(ds: xr.Dataset) -> xr.Dataset:
+    """The dispersion of the capacities in every measure (`MEASURES`) per (wall,
+    diaphragm) with its bootstrap interval, and per diaphragm the measure with the lowest
+    median dispersion over the walls (``best``): one IDA run, no new analyses."""
+    fits = xr.concat([fits_in(ds, im) for im in MEASURES], dim="measure")
+    fits = fits.assign_coords(measure=list(MEASURES))
+    typical = fits.dispersion.median("wall")
+    best = typical.idxmin("measure")
+    return fits.assign(typical_dispersion=typical, best=best)
+
+
+def record_magnitude_distance(ds: xr.Dataset, records_dir=None) -> tuple[np.ndarray,
+                                                                           np.ndarray]:
+    """Moment magnitude and rupture distance [km] of each record of an archive: the
+    archive's ``magnitude`` / ``distance`` coordinates when it has them, else the record
+    manifest's ``magnitude`` and the ``rrup_km`` of the record library's catalog
+    (``library/catalog.tsv`` of the records folder, matched on the manifest's file); NaN
+    where neither knows."""
+    ids = [str(r) for r in ds.record.values]
+    if "magnitude" in ds.coords and "distance" in ds.coords:
+        return ds.magnitude.values.astype(float), ds.distance.values.astype(float)
+    from . import records as rec
+    from .config import records_dir as folder
+
+    man = rec.manifest(records_dir)
+    mag = np.array([float(man.get(r, {}).get("magnitude", np.nan)) for r in ids])
+    rrup = {}
+    try:
+        lines = (folder(records_dir) / "library" / "catalog.tsv").read_text().splitlines()
+    except OSError:
+        lines = []
+    if lines:
+        head = lines[0].split("\t")
+        for line in lines[1:]:
+            row = dict(zip(head, line.split("\t"), strict=False))
+            rrup["library/" + row.get("path", "")] = float(row.get("rrup_km") or np.nan)
+    dist = np.array([rrup.get(man.get(r, {}).get("file", ""), np.nan) for r in ids])
+    return mag, dist
+
+
+def sufficiency(ds: xr.Dataset, magnitude, distance) -> xr.Dataset:
+    """Is a measure sufficient (Luco & Cornell 2007, Earthquake Spectra 23(2))? Per measure,
+    wall and diaphragm (first COR), the least-squares slope of the residuals
+    ``ln(capacity) - mean`` over the uncensored records on the records' magnitude and on
+    ``ln(distance)``, with its two-sided p-value (``slope_magnitude``, ``p_magnitude``,
+    ``slope_distance``, ``p_distance``). A measure is sufficient when the residuals do not
+    depend on them (large p-values)."""
+    from scipy.stats import linregress
+
+    d = first_cor(ds)
+    mag, ldist = np.asarray(magnitude, float), np.log(np.asarray(distance, float))
+    names = ("slope_magnitude", "p_magnitude", "slope_distance", "p_distance")
+    out = {n: np.full((len(MEASURES), d.wall.size, d.diaphragm.size), np.nan) for n in names}
+    cen = d.censored.transpose("wall", "diaphragm", "record").values
+    for k, im in enumerate(MEASURES):
+        lc = np.log(capacities(d, im).transpose("wall", "diaphragm", "record").values)
+        for iw, idp in np.ndindex(lc.shape[:2]):
+            for x, (s_name, p_name) in ((mag, names[:2]), (ldist, names[2:])):
+                ok = np.isfinite(lc[iw, idp]) & (cen[iw, idp] == 0) & np.isfinite(x)
+                if ok.sum() < 5 or np.ptp(x[ok]) == 0:
+                    continue
+                res = lc[iw, idp, ok] - lc[iw, idp, ok].mean()
+                fit = linregress(x[ok], res)
+                out[s_name][k, iw, idp], out[p_name][k, iw, idp] = fit.slope, fit.pvalue
+    dims = ("measure", "wall", "diaphragm")
+    return xr.Dataset({n: (dims, v) for n, v in out.items()},
+                      coords={"measure": list(MEASURES), "wall": d.wall,
+                              "diaphragm": d.diaphragm})
+
+
+def collapse_risk(ds: xr.Dataset, hazard, years: float = 50.0,
+                  resamples: int | None = None) -> xr.Dataset:
+    """Mean annual frequency (``rate`` [1/yr], with bootstrap bounds ``rate_lower`` /
+    ``rate_upper``) and probability in `years` (``probability``) of collapse per (wall,
+    diaphragm) at the first COR, from the fits in the hazard curve's measure
+    (`urmx.fragility.collapse_rate`; no new analyses), with the share of each rate from
+    beyond the curve (``tail_share``)."""
+    from .fragility import RESAMPLES, bootstrap_lognormal, collapse_rate, read_hazard
+    from .fragility.risk import HazardCurve, rates
+
+    curve = hazard if isinstance(hazard, HazardCurve) else read_hazard(hazard)
+    fits = fits_in(ds, curve.im, resamples=0)
+    d = first_cor(ds)
+    cap = capacities(d, curve.im).transpose("wall", "diaphragm", "record").values
+    cen = d.censored.transpose("wall", "diaphragm", "record").values
+    names = ("rate", "probability", "tail_share", "rate_lower", "rate_upper")
+    out = {n: np.full(cap.shape[:2], np.nan) for n in names}
+    for iw, idp in np.ndindex(cap.shape[:2]):
+        med = float(fits.median_collapse_intensity[iw, idp])
+        beta = float(fits.dispersion[iw, idp])
+        if not np.isfinite(med):
+            continue
+        r = collapse_rate(_Fit(med, beta, curve.im, curve.units), curve, years)
+        out["rate"][iw, idp], out["probability"][iw, idp] = r.rate, r.probability
+        out["tail_share"][iw, idp] = r.tail_share
+        ran = np.isfinite(cap[iw, idp])
+        bm, bd = bootstrap_lognormal(cap[iw, idp, ran], cen[iw, idp, ran],
+                                     RESAMPLES if resamples is None else resamples)
+        ok = np.isfinite(bm)
+        if ok.sum():
+            lam, _ = rates(curve, bm[ok], bd[ok], points=801)
+            out["rate_lower"][iw, idp], out["rate_upper"][iw, idp] = np.quantile(
+                lam, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
+    res = xr.Dataset({n: (("wall", "diaphragm"), v) for n, v in out.items()},
+                     coords={"wall": d.wall, "diaphragm": d.diaphragm})
+    return res.assign(median_collapse_intensity=fits.median_collapse_intensity,
+                      dispersion=fits.dispersion).assign_attrs(
+        im=curve.im, units=curve.units, hazard=curve.source, years=float(years))
+
+
+class _Fit:
+    """A fragility's median, dispersion, measure and units (what `collapse_rate` reads)."""
+
+    def __init__(self, median: float, dispersion: float, im: str, units: str):
+        self.median, self.dispersion, self.im, self.units = median, dispersion, im, units
+
+
+def risk_change(risk: xr.Dataset, soft: str = STIFFEN[0], stiff: str = STIFFEN[1]) -> dict:
+    """Per supports group with both diaphragms: the collapse rates of the as-built and the
+    stiffened diaphragm per wall and their ratio (stiff / soft) (`collapse_risk`)."""
+    out = {}
+    groups = supports_groups(risk) if "supports" in risk.coords else {
+        "top": [str(x) for x in risk.diaphragm.values]}
+    for g, labels in groups.items():
+        pick = {base_label(lab): lab for lab in labels}
+        if soft in pick and stiff in pick:
+            a, b = risk.rate.sel(diaphragm=pick[soft]), risk.rate.sel(diaphragm=pick[stiff])
+            out[g] = {"soft": pick[soft], "stiff": pick[stiff], "rate_soft": a,
+                      "rate_stiff": b, "ratio": b / a}
+    return out
+
+
+def margins(ds: xr.Dataset, spectrum) -> xr.Dataset:
+    """The median collapse capacity in ``sa_wall`` over the design spectrum's Sa at the
+    wall's rocking period, per (wall, diaphragm) at the first COR (``margin`` [1], with
+    ``median_sa_wall`` and ``design_sa`` [m s-2] and ``rocking_period`` [s])."""
+    from .fragility import design_sa, read_spectrum
+    from .fragility.risk import DesignSpectrum
+
+    spec = spectrum if isinstance(spectrum, DesignSpectrum) else read_spectrum(spectrum)
+    fits = fits_in(ds, "sa_wall", resamples=0)
+    period = first_cor(ds).rocking_period
+    demand = xr.DataArray(design_sa(spec, period.values), dims=period.dims,
+                          coords=period.coords)
+    med = fits.median_collapse_intensity
+    return xr.Dataset({"margin": med / demand, "median_sa_wall": med,
+                       "design_sa": demand}).assign_attrs(spectrum=spec.source)
+
+
+#: other period ranges of sa_avg the report compares with the default (T_r: the wall's
+#: rocking period, T_d: its top diaphragm's; 0.02 s stands in for a rigid top's 0)
+SA_AVG_RANGES = {
+    "between T_d and T_r": lambda tr, td: (np.maximum(np.minimum(td, tr), 0.02),
+                                           np.maximum(td, tr)),
+    "0.2 T_r to 3 T_r (Eads et al. 2015)": lambda tr, td: (0.2 * tr, 3.0 * tr),
+}
+
+
+def sa_avg_alternatives(ds: xr.Dataset, records_dir=None) -> dict[str, xr.DataArray]:
+    """The dispersion of the capacities per (wall, diaphragm) at the first COR in
+    ``sa_avg`` over each period range of `SA_AVG_RANGES` (10 log-spaced periods), from the
+    scale factors at collapse and the records' spectra (the records are read again: no
+    new analyses). Empty when the records cannot be read."""
+    from .errors import UrmxError
+    from .fragility import SA_AVG_PERIODS, fit_lognormal
+    from .records.measures import geometric_mean_psa
+    from .records.record import as_record
+
+    require_measures(ds)
+    d = first_cor(ds)
+    tr = d.rocking_period.transpose("wall", "diaphragm").values
+    td = 1.0 / d.cell_frequency.transpose("wall", "diaphragm").values
+    try:
+        recs = [as_record(str(r), records_dir) for r in d.record.values]
+    except (UrmxError, OSError):
+        return {}
+    scale = d.collapse_scale.transpose("wall", "diaphragm", "record").values
+    cen = d.censored.transpose("wall", "diaphragm", "record").values
+    out = {}
+    for name, rule in SA_AVG_RANGES.items():
+        lo, hi = rule(tr, td)
+        periods = np.geomspace(lo, hi, SA_AVG_PERIODS, axis=-1)
+        sa = np.stack([geometric_mean_psa(r.acceleration * float(sf), r.dt, periods)
+                       for r, sf in zip(recs, d.scale_factor.values, strict=True)], axis=-1)
+        disp = np.full(tr.shape, np.nan)
+        for iw, idp in np.ndindex(tr.shape):
+            ran = np.isfinite(scale[iw, idp])
+            try:
+                disp[iw, idp] = fit_lognormal(scale[iw, idp, ran] * sa[iw, idp, ran],
+                                              cen[iw, idp, ran], resamples=0).dispersion
+            except ValueError:
+                continue
+        out[name] = xr.DataArray(disp, dims=("wall", "diaphragm"),
+                                 coords={"wall": d.wall, "diaphragm": d.diaphragm})
+    return out

@@ -13,7 +13,21 @@
 - ``resonance.png``: each capacity relative to the same wall and record on the other
   flexible diaphragms, against the ratio of the record's predominant frequency to the
   diaphragm's;
-- ``stiffening.png``: the effect of stiffening a diaphragm from D1 to D4 on the median.
+- ``stiffening.png``: the effect of stiffening a diaphragm from D1 to D4 on the median;
+- ``efficiency.png``: the dispersion of the capacities in every intensity measure (one run
+  holds them all: the scale factor at collapse times each record's measure);
+- ``collapse_risk.png``: the hazard curve and the annual rate of collapse of every wall.
+
+The fragility curves carry their 90 % bootstrap bands; the sections "Which intensity
+measure predicts collapse best?" (efficiency, sufficiency against the records' magnitude
+and distance) and "Collapse risk" (a hazard curve, a design spectrum: by default the
+illustrative ones of ``catalog/hazard/``) are computed from the archive without new
+analyses (`urmx.fragility_analysis`).
+
+A section an archive cannot answer is left out and named, with what it needs: the
+slenderness section a rank correlation over `MIN_WALLS` walls, the resonance section two
+flexible diaphragms, the stiffening section D1 and D4; so an archive of one or two walls
+gets the rest of the report.
 
 Acceleration measures are shown in g (stored in m s-2).
 """
@@ -36,6 +50,26 @@ from .markdown import table
 from .plot import plot_capacity_resonance as plot_resonance
 from .plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
 from .reporting import open_archive, save_figure
+from .risk_report import (
+    measure_findings,
+    measure_numbers,
+    measures_section,
+    risk_findings,
+    risk_numbers,
+    risk_section,
+)
+
+#: the illustrative site of the "Collapse risk" section (`catalog/hazard/`, README there)
+HAZARD = "illustrative-pga-hazard.csv"
+SPECTRUM = "illustrative-design-spectrum.csv"
+YEARS = 50.0
+
+
+def default_site() -> tuple[Path, Path]:
+    """The illustrative hazard curve and design spectrum of ``catalog/hazard/``."""
+    from .catalog import catalog_dir
+
+    return catalog_dir() / "hazard" / HAZARD, catalog_dir() / "hazard" / SPECTRUM
 
 # the figures and reductions this report used to hold, where they live now (urmx.plot,
 # urmx.fragility_analysis), under their names here too
@@ -43,6 +77,8 @@ __all__ = ["write_report", "open_ida", "plot_ida_curves", "plot_fragility_curves
            "plot_median", "plot_resonance", "plot_stiffening", "resonance_table", "stiffening",
            "GROUPS", "STIFFEN"]
 resonance_table, stiffening = FA.resonance_table, FA.stiffening
+#: walls a rank correlation with slenderness needs (`urmx.analysis.spearman`)
+MIN_WALLS = 3
 
 
 def open_ida(archive) -> xr.Dataset:
@@ -69,7 +105,8 @@ def _group_name(group: str) -> str:
     return GROUPS.get(group, group).split(" (")[0]
 
 
-def write_report(archive, out_dir: str | os.PathLike) -> Path:
+def write_report(archive, out_dir: str | os.PathLike, hazard=None, spectrum=None,
+                 years: float = YEARS, records_dir=None) -> Path:
     """Write the figures and ``REPORT.md`` of an IDA archive into `out_dir`.
 
     Parameters
@@ -79,6 +116,14 @@ def write_report(archive, out_dir: str | os.PathLike) -> Path:
         ``[study.ida]``).
     out_dir : path
         Created if needed; figures of the same names are replaced.
+    hazard, spectrum : path, optional
+        Hazard curve and design spectrum of the "Collapse risk" section
+        (`urmx.fragility.risk`); default the illustrative ones (`default_site`).
+    years : float
+        Exposure time of the probabilities of collapse. [yr]
+    records_dir : path, optional
+        Records folder: the records' magnitudes and distances (sufficiency) and spectra
+        (other sa_avg ranges); parts that need them are left out when it is not there.
 
     Returns
     -------
@@ -88,11 +133,18 @@ def write_report(archive, out_dir: str | os.PathLike) -> Path:
     ds = open_ida(archive)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    site = default_site()
+    hazard, spectrum = hazard or site[0], spectrum or site[1]
     d = FA.first_cor(ds)
-    ranks, t, stf = FA.slenderness_ranks(d), FA.resonance_table(ds), FA.stiffening(ds)
-    lines = [*_header(ds, d), *_findings(d, ranks, t, stf), *_medians(ds, d),
-             *_curves(ds, d, out), *_slenderness(ds, d, ranks, out), *_resonance(ds, t, out),
-             *_stiffening(d, stf, out)]
+    ranks = FA.slenderness_ranks(d) if d.wall.size >= MIN_WALLS else None
+    t, stf = FA.resonance_table(ds), FA.stiffening(ds)
+    measures = measure_numbers(ds, records_dir)
+    risk = risk_numbers(ds, hazard, spectrum, years)
+    lines = [*_header(ds, d), *_findings(d, ranks, t, stf),
+             *measure_findings(measures), *risk_findings(risk), "", *_medians(ds, d),
+             *_curves(ds, d, out), *measures_section(ds, measures, out),
+             *_slenderness(ds, d, ranks, out), *_resonance(ds, t, out),
+             *_stiffening(d, stf, out), *risk_section(ds, risk, out)]
     path = out / "REPORT.md"
     path.write_text("\n".join(lines), encoding="utf-8")
     return path
@@ -142,17 +194,36 @@ def _header(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
 
 
 def _medians(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
-    """The median collapse intensity and dispersion of every wall and diaphragm."""
+    """The median collapse intensity and dispersion of every wall and diaphragm, with their
+    bootstrap intervals when the archive holds them."""
     f, unit = P.display_scale(ds.collapse_intensity.attrs.get("units", ""))
+    ci = "median_collapse_intensity_lower" in d
+    level = f"{100 * float(ds.attrs.get('confidence_level', 0.9)):g} %"
     lines = ["## Median collapse intensity and dispersion", ""]
+    if ci:
+        lines += [f"In brackets: the {level} bootstrap interval (records resampled, "
+                  f"{ds.attrs.get('bootstrap_resamples', '?')} resamples, seed "
+                  f"{ds.attrs.get('bootstrap_seed', '?')}; `urmx.fragility.fit_lognormal`).",
+                  ""]
+
+    def cell(c) -> str:
+        med, beta = float(c.median_collapse_intensity) * f, float(c.dispersion)
+        if not ci:
+            return f"{_fmt(med)} ({_fmt(beta, 2)})"
+        lo, hi = (float(c[f"median_collapse_intensity_{b}"]) * f for b in ("lower", "upper"))
+        blo, bhi = (float(c[f"dispersion_{b}"]) for b in ("lower", "upper"))
+        if not np.isfinite(lo):  # too few records for an interval
+            return f"{_fmt(med)} ({_fmt(beta, 2)})"
+        return (f"{_fmt(med)} [{_fmt(lo)}-{_fmt(hi)}] ({_fmt(beta, 2)} "
+                f"[{_fmt(blo, 2)}-{_fmt(bhi, 2)}])")
+
     for g, labels in FA.supports_groups(d).items():
         lines += [f"{GROUPS.get(g, g).capitalize()}: median [{unit}] (dispersion beta)", ""]
         rows = []
         for w in d.wall.values:
             c = d.sel(wall=w)
-            rows.append([str(w), f"{float(c.slenderness):.0f}"] + [
-                f"{_fmt(float(c.median_collapse_intensity.sel(diaphragm=lab)) * f)} "
-                f"({_fmt(float(c.dispersion.sel(diaphragm=lab)), 2)})" for lab in labels])
+            rows.append([str(w), f"{float(c.slenderness):.0f}"]
+                        + [cell(c.sel(diaphragm=lab)) for lab in labels])
         lines += table(["wall", "h/t", *labels], rows) + [""]
     return lines
 
@@ -165,13 +236,23 @@ def _curves(ds: xr.Dataset, d: xr.Dataset, out: Path) -> list[str]:
     for lab in [str(x) for x in d.diaphragm.values]:
         lines.append(_save(P.plot_ida_curves(ds, lab), out, f"ida_{_fname(lab)}.png"))
     return lines + ["", "## Fragility curves per diaphragm", "",
-                    "Lognormal fits per wall (lines) and the records' capacities (dots, "
-                    "plotted at (i - 0.5)/n; censored records are not dotted).", "",
+                    "Lognormal fits per wall (lines) with their 90 % bootstrap bands "
+                    "(shaded: the pointwise 5-95 % range of the probability over the "
+                    "records resampled) and the records' capacities (dots, plotted at "
+                    "(i - 0.5)/n; censored records are not dotted).", "",
                     _save(P.plot_fragility_curves(ds), out, "fragility_curves.png"), ""]
 
 
-def _slenderness(ds: xr.Dataset, d: xr.Dataset, ranks: dict, out: Path) -> list[str]:
+def _too_few_walls(d: xr.Dataset) -> str:
+    return (f"needs at least {MIN_WALLS} walls for a rank correlation with h/t; the archive "
+            f"has {d.wall.size}")
+
+
+def _slenderness(ds: xr.Dataset, d: xr.Dataset, ranks: dict | None, out: Path) -> list[str]:
     """Does h/t predict stability: rank correlations and the stocky/slender ratio."""
+    if ranks is None:
+        return ["## Does slenderness predict stability?", "",
+                f"_Left out: this section {_too_few_walls(d)}._", ""]
     lo_w, hi_w = ranks["stocky"], ranks["slender"]
     rows = []
     for i, lab in enumerate(str(x) for x in d.diaphragm.values):
@@ -238,10 +319,25 @@ def _stiffening(d: xr.Dataset, stf: dict, out: Path) -> list[str]:
 
 # ---- the findings: the answers in numbers, computed (so they stay true when regenerated) ----
 
-def _findings(d: xr.Dataset, ranks: dict, t: xr.Dataset, stf: dict) -> list[str]:
-    """The findings section: one bullet per question the report answers."""
-    return (["## Findings", "", _slenderness_finding(d, ranks)] + _resonance_findings(t)
-            + [_stiffening_finding(g, v) for g, v in stf.items()] + [""])
+def _findings(d: xr.Dataset, ranks: dict | None, t: xr.Dataset, stf: dict) -> list[str]:
+    """The findings section: one bullet per question the report answers (and one per
+    question it leaves out, saying what it needs)."""
+    slender = (_slenderness_finding(d, ranks) if ranks is not None else
+               f"- **Slenderness.** Left out: it {_too_few_walls(d)}.")
+    return (["## Findings", "", slender] + _resonance_findings(t)
+            + [_stiffening_finding(g, v) for g, v in stf.items()] + _left_out(t, stf))
+
+
+def _left_out(t: xr.Dataset, stf: dict) -> list[str]:
+    """Bullets naming the questions of the findings the archive cannot answer."""
+    lines = []
+    if not t.cell.size:
+        lines.append("- **Resonance.** Left out: it needs two flexible diaphragms of one "
+                     "supports group with collapses on both.")
+    if not stf:
+        lines.append(f"- **Stiffening.** Left out: it needs diaphragms {STIFFEN[0]} and "
+                     f"{STIFFEN[1]} of one supports group.")
+    return lines
 
 
 def _slenderness_finding(d: xr.Dataset, ranks: dict) -> str:

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .config import project_root
+from .config import checkout, need_checkout
 from .model import Wall
 
 if sys.version_info >= (3, 11):
@@ -112,9 +112,11 @@ def cpu_model() -> str:
 
 def git_commit() -> str:
     """Short commit of the checkout, with ``(urmx/ modified)`` when the package differs."""
+    root = checkout()  # None for an installed urmx (its folder may be in another repository)
+
     def git(*args: str) -> str:
-        return subprocess.run(["git", *args], cwd=project_root(), capture_output=True,
-                              text=True, timeout=10).stdout.strip()
+        return subprocess.run(["git", *args], cwd=root, capture_output=True,
+                              text=True, timeout=10).stdout.strip() if root else ""
     try:
         head, dirty = git("rev-parse", "--short=12", "HEAD"), git("status", "--porcelain", "urmx")
     except (OSError, subprocess.SubprocessError):
@@ -222,7 +224,9 @@ def run(update: bool = False, baseline_path: str | os.PathLike | None = None,
     """Measure and judge; with `update` first store the measurement as the baseline of
     this machine class. Returns the measurement with ``passed``, ``messages``,
     ``baseline`` and ``guard_seconds``."""
-    path = Path(baseline_path) if baseline_path else project_root() / BASELINE
+    # an installed urmx has no stored figures (speed not judged) and stores none
+    root = need_checkout("guard --update") if update and not baseline_path else checkout()
+    path = Path(baseline_path) if baseline_path else root / BASELINE if root else None
     t0 = time.perf_counter()
     m = measure(quick)
     if update:
@@ -233,7 +237,7 @@ def run(update: bool = False, baseline_path: str | os.PathLike | None = None,
             "commit": git_commit(),
             "date": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat(),
             "load_average": round(load, 2)})
-    stored = read_baseline(path).get(m["machine_class"])
+    stored = read_baseline(path).get(m["machine_class"]) if path else None
     ok, msgs = verdict(m, stored)
     m.update(passed=ok, messages=msgs, baseline=stored, guard_seconds=time.perf_counter() - t0)
     echo(f"urmx bench guard [{m['machine_class']}]: kernel {1e3 * m['seconds']:.3f} ms per "

@@ -17,12 +17,23 @@ time. Its solution is an entire function of time, so:
 * Whole sub-steps are stepped by one matrix-vector product (exact to round-off).
 * Where an event function changes sign on a sub-step, or may dip through zero between
   its ends (a cubic Hermite estimate from the exact values and rates at both ends says it
-  might), or where a peak output may have an interior extremum above its running peak,
-  the exact solution on that sub-step is expanded in its Taylor series about the
-  sub-step start. With ``nu*h <= 1`` the series converges to round-off in 10-30 terms
-  and the roots of event functions, their times, and the states there are found on it
-  by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
+  might), or starts at zero, or where a peak output may have an interior extremum above
+  its running peak, the exact solution on that sub-step is expanded in its Taylor series
+  about the sub-step start. With ``nu*h <= 1`` the series converges to round-off in 10-30
+  terms and the roots of event functions, their times, and the states there are found on
+  it by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
   The state at an event is the series summed at the event time, not an interpolant.
+* A function at zero after an event (the joint that has just impacted, a joint released
+  from a hold with gap, rate and acceleration zero, a branch boundary just crossed: its
+  value is below what its rate covers in 1/16 of a sub-step) can come back within the
+  sub-step, even twice, which the signs at the sub-step's ends do not show. On the
+  sub-step after the event (and on the next one too when that was shorter than 1/16 of a
+  sub-step) its series is searched for its first fall (:func:`_first_fall`: samples
+  growing geometrically from the start, then even ones, extrema between samples located
+  exactly), unless the series proves that it rises throughout (:func:`_rising`, after
+  most events) or that it is concave (:func:`_no_extra_fall`). This search runs after the
+  one above and only an earlier fall replaces what that found, so a sub-step without
+  such a fall gives the same bits as before it existed.
 
 The integration loop (:func:`_march`) is one compiled function that never allocates
 (``_nrt=False``: numba's reference counting of every array passed to every helper cost
@@ -50,15 +61,21 @@ Documented choices (MODEL.md section 4)
   removed by a perfectly plastic impulse), with the mass matrix and curves of the family
   after that impact. It is released when the constraint would have to pull: when the
   unconstrained motion of a family, at the current state, accelerates the gap away from
-  zero on that family's side (``sigma * g_dd(family(sigma)) > 0``; the current family is
-  tried first). While both families drive the gap back to zero (a sticking joint, which
-  none of the four patterns describes) it stays held. Physically: a joint that keeps
-  closing faster than the record can open it is closed until the opening rule opens it
-  again. This ends Zeno chatter (impacts accumulating at a point) in a held joint instead
-  of in the event bound.
+  zero on that family's side (``sigma * g_dd(family(sigma)) > 0``, family 2 while the
+  other joint is not open; when both sides qualify at once, the side whose family is the
+  current one: :func:`release_tie`). A hold may last no time (released at once). While
+  both families drive the gap back to zero (a sticking joint, which none of the four
+  patterns describes) it stays held. Physically: a joint that keeps closing faster than
+  the record can open it is closed until the opening rule opens it again. This ends Zeno
+  chatter (impacts accumulating at a point) in a held joint instead of in the event bound.
 * Impacts closer than the window ``w`` (default 1e-6 s) are merged (section 7).
 * At most ``MAX_EVENTS_PER_STEP`` events in one record step; beyond that the run stops
   with status ``event-limit`` (a guard against a hang; no catalog wall reaches it).
+* Bounded work: the record step must lie in ``DT_RANGE`` (1e-6 to 1 s), and a support
+  whose spring needs more than ``MAX_SUBSTEPS`` (1000) sub-steps a record step is refused
+  when the wall's tables are built, with the advice to declare it rigid (1e9 N/m springs
+  without diaphragm mass, the stiffest the catalog and the tests use, need 101 at
+  dt = 0.02 s).
 """
 
 from __future__ import annotations
@@ -82,6 +99,10 @@ from .model import (
     P_CT,
     P_KDB,
     P_KDT,
+    P_M1,
+    P_M2,
+    P_MDB,
+    P_MDT,
     P_RIGID_B,
     P_RIGID_T,
     Wall,
@@ -103,6 +124,11 @@ GATE = 0.05  # refine an interior extremum when the Hermite estimate is within 5
 TIME_TOL = 1e-12  # event time tolerance [s]
 MAX_EVENTS_PER_STEP = 200
 WINDOW = 1e-6  # merged-impact window w [s]
+DT_RANGE = (1e-6, 1.0)  # record steps the kernel accepts [s]
+# most sub-steps a record step may need: a support whose spring needs more is refused
+# (declared rigid it is a constraint and needs none); 1e9 N/m springs without diaphragm
+# mass, the stiffest the catalog and the tests use, need 101 at dt = 0.02 s
+MAX_SUBSTEPS = 1000
 G_OPEN_FACTOR = 1e-6
 
 # every numba array over the reduced coordinates is padded to NP entries: the unused
@@ -364,6 +390,17 @@ def active_events(P, L, REL, ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
     elif h == HELD_CRACK:
         k = _held_branch_events(P, ist, L, k, rows, vrows, agc, sig, kap, kind, tgt)
     return k
+
+
+@inner
+def release_tie(ist, kind, tgt, k_ev, k):
+    """True when event k should replace event k_ev due at the same instant: both release
+    the same held joint, and k to the side whose family is the current one (its own side:
+    the family the hold is in), which opens when both sides qualify (MODEL.md section 4).
+    Any other tie keeps the event found first."""
+    if kind[k] != kind[k_ev] or not (kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE):
+        return False
+    return tgt[k] == (ist[I_S] if kind[k] == EV_BASE_RELEASE else ist[I_C])
 
 
 @inner
@@ -783,6 +820,14 @@ def _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig, kap, cf):
 
 
 @inline
+def _event_poly(rows, vrows, agc, sig, kap, kind, k, D, m, h, a0, beta, cf):
+    """Coefficients in s = t/h of event function k on the Taylor series D of a sub-step."""
+    if kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE:
+        return _release_poly(rows, vrows, agc, k, D, m, h, a0, beta, sig[k], kap[k], cf)
+    return _scalar_poly(rows, k, D, m, False, h, 0.0, 0.0, sig[k], kap[k], cf)
+
+
+@inline
 def _peval(cf, m, s):
     p = cf[m - 1]
     dp = 0.0
@@ -913,6 +958,125 @@ def _scan(cf, m, first_max, single_min):
                 return sm
         d_prev, s_prev = d, s
     return -1.0 if first_max else 2.0
+
+
+@inner
+def _no_extra_fall(cf, m):
+    """True when a polynomial on [0, 1] that starts at zero (to round-off) or behind it
+    provably falls through zero at most once, the fall its end values show: it stays
+    positive on (0, 1] (``c_0 .. c_(d-1) >= 0`` and ``c_d > sum_(j>d) |c_j|`` for d = 1, 2
+    or 3: the orders of a rate, of a released joint's zero rate and zero acceleration), or
+    it is concave (its positive set is one interval)."""
+    t1 = 0.0  # sum_(j>=2) |c_j|
+    t2 = 0.0  # sum_(j>=3) |c_j|
+    t3 = 0.0  # sum_(j>=4) |c_j|
+    curv = 0.0  # sum_(j>=3) j (j-1) |c_j|: e''/2 <= c_2 + curv/2 on [0, 1]
+    for j in range(2, m):
+        a = abs(cf[j])
+        t1 += a
+        if j >= 3:
+            t2 += a
+            curv += j * (j - 1.0) * a
+        if j >= 4:
+            t3 += a
+    c0, c1, c2, c3 = cf[0], cf[1], cf[2], cf[3]  # (m >= 4: every series has 4 terms)
+    if c0 >= 0.0 and (c1 > t1 or (c1 >= 0.0 and (c2 > t2 or (c2 >= 0.0 and c3 > t3)))):
+        return True
+    return 2.0 * c2 + curv < 0.0
+
+
+N_GEOM = 33  # samples of _first_fall growing geometrically, s_cap * 2^-36 .. s_cap/16
+
+
+@inner
+def _first_fall(cf, m, s_cap):
+    """The first fall through zero on (0, s_cap] of a polynomial on [0, 1] that starts at
+    zero (to round-off), or behind it, as a bracket (lo, hi) with p(lo) > 0 >= p(hi);
+    hi = 2.0 when it does not fall there.
+
+    A contact function at zero after an event (an impact, a release that leaves its value,
+    rate and acceleration zero) may leave and come back at any time, however soon: it is
+    sampled at N_GEOM points growing geometrically from s_cap * 2^-36 to s_cap/16 and then
+    at 15 even points up to s_cap, and the extrema between two samples are located
+    exactly. Before it has been positive a fall is no event (it has not left zero yet)."""
+    armed = cf[0] > 0.0
+    s_prev = 0.0
+    d_prev = cf[1]
+    s = s_cap * 2.0 ** -(N_GEOM + 4)
+    for i in range(N_GEOM + 15):
+        s = 2.0 * s if i < N_GEOM else s_cap * (i - N_GEOM + 2) / 16.0
+        p, d = _peval1(cf, m, s)
+        if armed:
+            if p <= 0.0:
+                return s_prev, s
+            if d_prev < 0.0 and d > 0.0:  # a minimum between the samples
+                a, b = _newton(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s), 1)
+                sm = 0.5 * (a + b)
+                if _peval(cf, m, sm)[0] <= 0.0:
+                    return s_prev, sm
+        elif p > 0.0:
+            armed = True
+        elif d_prev >= 0.0 and d < 0.0:  # a maximum between samples both at or below zero
+            a, b = _newton(cf, m, s_prev, s, 1e-14, 0.5 * (s_prev + s), 1)
+            sm = 0.5 * (a + b)
+            if _peval(cf, m, sm)[0] > 0.0:
+                return sm, s
+        s_prev = s
+        d_prev = d
+    return 0.0, 2.0
+
+
+@inline
+def _rising(zero, rows, sig, kind, e_a, D, m):
+    """The functions at zero (bits of `zero`) left once those are taken out that rise from
+    zero faster than the rest of their series (D, m terms) can pull them back: e(s) >= c0
+    + s (c1 - sum_(j>=2) |c_j|) > 0 on (0, 1] when c0 >= 0. Release functions (their rows
+    include rates) are always left. (It runs after most events: four partial sums, so that
+    the additions do not wait for each other.)"""
+    for k in range(MAX_EV):
+        if (zero >> k) & 1 and e_a[k] >= 0.0 and kind[k] != EV_BASE_RELEASE \
+                and kind[k] != EV_CRACK_RELEASE:
+            r0, r1, r2 = rows[k, 0], rows[k, 1], rows[k, 2]
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            s3 = 0.0
+            for j in range(2, m - 3, 4):
+                s0 += abs(r0 * D[j, 0] + r1 * D[j, 1] + r2 * D[j, 2])
+                s1 += abs(r0 * D[j + 1, 0] + r1 * D[j + 1, 1] + r2 * D[j + 1, 2])
+                s2 += abs(r0 * D[j + 2, 0] + r1 * D[j + 2, 1] + r2 * D[j + 2, 2])
+                s3 += abs(r0 * D[j + 3, 0] + r1 * D[j + 3, 1] + r2 * D[j + 3, 2])
+            for j in range(m - (m - 2) % 4, m):
+                s0 += abs(r0 * D[j, 0] + r1 * D[j, 1] + r2 * D[j, 2])
+            c1 = sig[k] * (r0 * D[1, 0] + r1 * D[1, 1] + r2 * D[1, 2])
+            if c1 > (s0 + s1) + (s2 + s3):
+                zero &= ~(1 << k)
+    return zero
+
+
+@inner
+def _first_falls(rows, vrows, agc, sig, kap, kind, ne, zero, D, m, H, a0, beta, cf, s_ev,
+                 k_ev):
+    """The earliest fall on a sub-step (series D of m terms, length H) of the event
+    functions at zero (bits of `zero`), by :func:`_first_fall` unless
+    :func:`_no_extra_fall` rules it out, if earlier than s_ev (function k_ev, -1 for none)
+    by more than the time tolerance. Returns (s_ev, k_ev)."""
+    tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
+    for k in range(ne):
+        if not (zero >> k) & 1:
+            continue
+        mc = _event_poly(rows, vrows, agc, sig, kap, kind, k, D, m, H, a0, beta, cf)
+        if _no_extra_fall(cf, mc):
+            continue
+        cap = min(s_ev, 1.0)
+        f_lo, f_hi = _first_fall(cf, mc, cap)
+        if f_hi > cap:
+            continue
+        s_root = _newton(cf, mc, f_lo, f_hi, tol, 0.5 * (f_lo + f_hi), 0)[1]
+        if k_ev < 0 or s_root < s_ev - tol:
+            s_ev = s_root
+            k_ev = k
+    return s_ev, k_ev
 
 
 @inner
@@ -1255,6 +1419,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     duration = t_end
     done = False
     beta_prev = beta0
+    near = 0  # bit k: event function k may have just left zero (set at events)
     for step in range(nsteps):
         if step < N - 1:
             alpha = ag[step]
@@ -1307,32 +1472,27 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
             k_ev = -1
             for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b) else 0):
                 opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
-                release = kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE
-                crossing = e_a[k] > 0.0 and e_b[k] <= 0.0
+                ea, eb, eda, edb = e_a[k], e_b[k], ed_a[k], ed_b[k]
+                crossing = ea > 0.0 and eb <= 0.0
                 # started on (or just behind) zero moving inward, and ends at or behind
                 # it again: it rose and fell back (after an impact, a merged impact)
-                rebound = e_a[k] <= 0.0 and ed_a[k] > 0.0 and e_b[k] <= 0.0
+                rebound = ea <= 0.0 and eda > 0.0 and eb <= 0.0
                 dip = False
                 if opening:
                     # a tiny threshold (g_open) can be crossed and recrossed within a
                     # sub-step, with zero rate at the start (at rest): scan the series
-                    dip = not crossing and e_a[k] > 0.0
-                elif not crossing and e_a[k] > 0.0 and e_b[k] > 0.0 and ed_a[k] < 0.0 \
-                        and ed_b[k] > 0.0 and min(e_a[k], e_b[k]) - (4.0 / 27.0) * H * (
-                            ed_b[k] - ed_a[k]) < 0.25 * max(e_a[k], e_b[k]):
+                    dip = not crossing and ea > 0.0
+                elif not crossing and ea > 0.0 and eb > 0.0 and eda < 0.0 and edb > 0.0 \
+                        and min(ea, eb) - (4.0 / 27.0) * H * (edb - eda) < 0.25 * max(ea, eb):
                     # (the Hermite cubic stays above min(ends) - 4/27 (|m0| + |m1|))
-                    lo, hi, slo, shi = _hermite_ext(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
-                    dip = lo < 0.25 * max(e_a[k], e_b[k])
+                    lo, hi, slo, shi = _hermite_ext(ea, eb, eda * H, edb * H)
+                    dip = lo < 0.25 * max(ea, eb)
                 if not (crossing or dip or rebound):
                     continue
                 if m_taylor == 0:
                     m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                if release:
-                    mc = _release_poly(rows, vrows, agc, k, D, m_taylor, H, a0, beta, sig[k],
-                                       kap[k], cf)
-                else:
-                    mc = _scalar_poly(rows, k, D, m_taylor, False, H, 0.0, 0.0, sig[k],
-                                      kap[k], cf)
+                mc = _event_poly(rows, vrows, agc, sig, kap, kind, k, D, m_taylor, H, a0, beta,
+                                 cf)
                 s_lo = 0.0
                 s_hi = 1.0
                 if rebound:
@@ -1343,7 +1503,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                     if opening and _lower_bound(cf, mc) > 0.0:
                         continue  # e(s) >= c0 - sum|c_j| > 0 on [0, 1]: no crossing
                     # the exact first point where e <= 0 on the sub-step, if any
-                    s_hi = _scan(cf, mc, False, ed_a[k] < 0.0 and not opening)
+                    s_hi = _scan(cf, mc, False, eda < 0.0 and not opening)
                     if s_hi > 1.0:
                         continue
                 if s_hi > s_ev:
@@ -1353,14 +1513,30 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                     s_hi = s_ev
                 tol = TIME_TOL / H if H > 1e3 * TIME_TOL else 1e-3
                 if crossing and s_hi == 1.0:
-                    guess = _hermite_root(e_a[k], e_b[k], ed_a[k] * H, ed_b[k] * H)
+                    guess = _hermite_root(ea, eb, eda * H, edb * H)
                 else:
                     guess = 0.5 * (s_lo + s_hi)
                 lo_, hi_ = _newton(cf, mc, s_lo, s_hi, tol, guess, 0)
                 s_root = hi_  # the side where the event function has crossed
-                if s_root < s_ev or k_ev < 0:
+                if s_root < s_ev or k_ev < 0 or (s_root == s_ev and release_tie(
+                        ist, kind, tgt, k_ev, k)):
                     s_ev = s_root
                     k_ev = k
+            if near:
+                # a function at zero after an event (an impact, a release, a boundary
+                # crossed) can come back at once, even twice, which the ends' signs do not
+                # show: unless it provably rises through this sub-step, its first fall is
+                # searched for (MODEL.md section 4, last detail of holding). A second pass,
+                # so that the events of the first are found as before, and calls, to keep
+                # this loop small.
+                if m_taylor == 0:
+                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
+                zero = _rising(near, rows, sig, kind, e_a, D, m_taylor)
+                if zero:
+                    s_ev, k_ev = _first_falls(rows, vrows, agc, sig, kap, kind, ne, zero, D,
+                                              m_taylor, H, a0, beta, cf, s_ev, k_ev)
+                if H >= h_sub / 16.0:
+                    near = 0  # (left zero a sixteenth of a sub-step ago at least)
             s_end = 1.0
             t_end = tb
             if k_ev >= 0:
@@ -1437,17 +1613,25 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                 if rel:
                     _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, alpha + beta * tau, beta, e_a,
                                 ed_a)
+                # the functions at zero (MODEL.md section 4): searched for a fall on this
+                # sub-step and the next
+                h_next = dt / nsub[mid]
+                near = 0
+                for k in range(ne):
+                    if kind[k] != EV_BASE_OPEN and kind[k] != EV_CRACK_OPEN \
+                            and e_a[k] <= (h_next / 16.0) * max(ed_a[k], 0.0):
+                        near |= 1 << k
                 # a boundary reached at the same instant and moving outward fires now; a
-                # held joint whose release test is already positive is released now
+                # held joint whose release test is already positive is released now (to
+                # the side of the current family when both sides qualify)
                 k_ev = -1
                 for k in range(ne):
                     if kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE:
                         now = e_a[k] < 0.0 or (e_a[k] == 0.0 and ed_a[k] < 0.0)
                     else:
                         now = e_a[k] <= 0.0 and ed_a[k] < 0.0
-                    if now:
+                    if now and (k_ev < 0 or release_tie(ist, kind, tgt, k_ev, k)):
                         k_ev = k
-                        break
             if status == ST_NEED_PIECE:
                 return status
             if status != ST_OK:
@@ -1487,6 +1671,7 @@ LOOP = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",))
 # the kernel calls the wrapper-less ones above.
 active_events_py = entry(active_events.py_func)
 handle_event_py = entry(handle_event.py_func)
+release_tie_py = entry(release_tie.py_func)
 record_row_py = entry(record_row.py_func)
 
 
@@ -1742,6 +1927,23 @@ class Tables:
                 out[:, which, f - 1, 2 * NP + 1] = -(R0 @ JM)
         return out
 
+    def _too_stiff(self, need: float) -> str:
+        """The message refusing a support whose spring needs `need` sub-steps a step: it
+        names the stiffer support (by its frequency with the diaphragm and half the wall)."""
+        P = self.P
+        freq = {}
+        for where, k, md in (("bottom", P[P_KDB], P[P_MDB]), ("top", P[P_KDT], P[P_MDT])):
+            if k > 0.0:
+                freq[where] = math.sqrt(k / (md + 0.5 * (P[P_M1] + P[P_M2])))
+        if not freq:  # (no spring: the trilinear curves alone cannot be this stiff)
+            return f"the wall needs {need:.3g} sub-steps per record step of {self.dt:g} s"
+        where = max(freq, key=freq.get)
+        k = P[P_KDB] if where == "bottom" else P[P_KDT]
+        return (f"{where}_stiffness={k:g} N/m needs {need:.3g} sub-steps per record step of "
+                f"{self.dt:g} s, above the bound of {MAX_SUBSTEPS}: the analysis would not "
+                f"finish in reasonable time; declare the support rigid "
+                f"({where}_stiffness = \"rigid\") if it stands for one")
+
     def _propagators(self, ny: int, mids, MK, MC, MR, MG) -> None:
         """Sub-step count and exact propagator of pieces with ny coordinates: one matrix
         exponential of [[A, c_R, c_G, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]] (A the
@@ -1756,7 +1958,12 @@ class Tables:
         Z[:, ny:m, m] = -MR
         Z[:, ny:m, m + 1] = -MG
         Z[:, m + 1, m + 2] = 1.0
+        if not np.isfinite(Z).all():
+            raise InputError(self._too_stiff(math.inf))
         nu = np.abs(np.linalg.eigvals(Z[:, :m, :m])).max(axis=-1) if m else np.zeros(npc)
+        need = float(np.ceil(nu.max() * self.dt / RHO)) if npc else 1.0
+        if not need <= MAX_SUBSTEPS:
+            raise InputError(self._too_stiff(need))
         ns = np.maximum(1, np.ceil(nu * self.dt / RHO)).astype(np.int64)
         hs = self.dt / ns
         # balanced: rates scaled by the sub-step (z = [y, h y_d]), so that |Z h| is about
@@ -1819,6 +2026,9 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
         raise InputError(f"dt={dt!r} must be a number of seconds") from None
     if not (math.isfinite(dt) and dt > 0.0):
         raise InputError(f"dt={dt!r} must be a positive, finite time step in seconds")
+    if not DT_RANGE[0] <= dt <= DT_RANGE[1]:
+        raise InputError(f"dt={dt!r} s is not a record step the kernel accepts: it must lie "
+                         f"in [{DT_RANGE[0]:g}, {DT_RANGE[1]:g}] s")
     ag = np.asarray(ground_acceleration, dtype=float)
     if ag.ndim != 1 or ag.size < 2:
         raise InputError(f"ground_acceleration must be a 1-D array of at least 2 samples "

@@ -30,6 +30,19 @@ PAPER_G = 9.81  # m s-2, the paper's gravity (Table III; MODEL.md section 1); no
 RIGID = "rigid"
 EFFECTIVE_MASS = 8.0 / 15.0  # Eq. 7: effective over nominal mass of building walls and diaphragms
 
+
+def effective_wall_mass(density: float, thickness: float, height: float,
+                        wall_length: float) -> float:
+    """Effective wall mass of a building, Eq. 7: 8/15 of both out-of-plane walls' mass
+    (`density` [kg m-3], `thickness`, `height` and each wall's `wall_length` [m]). [kg]"""
+    return EFFECTIVE_MASS * 2.0 * density * thickness * height * wall_length
+
+
+def effective_diaphragm_mass(diaphragm_weight: float, plan_area: float) -> float:
+    """Effective diaphragm mass, Eq. 7: 8/15 of its seismic weight (`diaphragm_weight`
+    [kPa] over `plan_area` [m2]) over g. [kg]"""
+    return EFFECTIVE_MASS * diaphragm_weight * 1e3 * plan_area / PAPER_G
+
 #: plausible values of a wall (low, high, SI unit): a wall outside them is refused (its
 #: numbers are nearly always in another unit: a thickness of 350 is millimetres) unless it
 #: is built with ``allow_unusual=True``; a diaphragm mass may also be 0 (none) and a
@@ -331,9 +344,9 @@ class Wall:
                              "[N m-1] and diaphragm_frequency= [Hz]")
         for name in ("thickness", "height"):
             positive(name, locals()[name])
-        # Eq. 7, in the catalog's order of operations (bitwise the same masses)
-        mass = EFFECTIVE_MASS * 2.0 * density * thickness * height * wall_length
-        md = EFFECTIVE_MASS * diaphragm_weight * 1e3 * plan_area / PAPER_G
+        # Eq. 7: the one formula the catalog's building uses too
+        mass = effective_wall_mass(density, thickness, height, wall_length)
+        md = effective_diaphragm_mass(diaphragm_weight, plan_area)
         if diaphragm_frequency is not None:
             f = positive("diaphragm_frequency", diaphragm_frequency)
             k: float | str = (2.0 * math.pi * f) ** 2 * (md + 0.5 * mass)

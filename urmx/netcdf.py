@@ -3,13 +3,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import writing
+from .errors import OutputError
 
 if TYPE_CHECKING:  # xarray is not imported here: the fill value is read on workers too
     import xarray as xr
@@ -52,21 +54,53 @@ def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
 
 def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     """Write `ds` as netCDF4 to a temporary name beside `path` and rename it, so an
-    interrupted write never leaves a broken file; parent folders are created.
+    interrupted write never leaves a broken file; parent folders are created, and the
+    temporary file is removed whatever happens.
 
     Returns
     -------
     pathlib.Path
         The file written.
+
+    Raises
+    ------
+    urmx.errors.OutputError
+        The file cannot be written (a full disk, a folder removed meanwhile, the netCDF
+        library's ``NetCDF: HDF error``): one line naming the file, the reason and the
+        space left on its disk.
     """
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        with writing(path, "netCDF file"):  # a full disk, a folder removed meanwhile
-            path.parent.mkdir(parents=True, exist_ok=True)
-            ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
-            os.replace(tmp, path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding(ds))
+        os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:  # netCDF4 reports HDF5's failures as
+        # RuntimeError ("NetCDF: HDF error"), and a full disk as often as not as EACCES:
+        # the space left is said with the reason
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise OutputError(f"cannot write netCDF file {str(path)!r}: {reason} "
+                          f"({_free(path.parent)})") from exc
     finally:
-        if tmp.exists():
+        with contextlib.suppress(OSError):
             tmp.unlink()
     return path
+
+
+def _free(folder: Path) -> str:
+    """The space left on `folder`'s disk, in words."""
+    try:
+        free = shutil.disk_usage(folder).free
+    except OSError:
+        return "space left unknown"
+    return f"{free / 1e6:.1f} MB free on its disk" + (": the disk is full" if disk_full(folder)
+                                                       else "")
+
+
+def disk_full(folder: str | os.PathLike, below: float = 1e6) -> bool:
+    """Whether the disk of `folder` has less than `below` bytes free (False when it cannot
+    be asked)."""
+    try:
+        return shutil.disk_usage(folder).free < below
+    except OSError:
+        return False

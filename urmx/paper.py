@@ -32,7 +32,6 @@ import xarray as xr
 
 from . import analysis as A
 from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
-from .config import project_root
 from .errors import MissingFileError
 from .markdown import table
 from .model import PAPER_G, RIGID
@@ -253,14 +252,15 @@ def table4(catalog: Catalog | None = None, paper: Paper | None = None) -> list[d
 
 def calibration_report(out_dir: str | os.PathLike | None = None,
                        catalog: Catalog | None = None, paper: Paper | None = None) -> Path:
-    """Write ``calibration.md`` and ``calibration/frequencies.png`` into ``out_dir``.
+    """Write ``calibration.md`` and ``calibration/frequencies.png`` into ``out_dir``
+    (default ``reports/`` of the current folder).
 
     The table shows the catalog's building (as stored, rounded) against Table IV and
     Table VI, and the unrounded least-squares optimum beside it.
     """
     cat = catalog or load_catalog()
     paper = paper or load_paper()
-    out = Path(out_dir) if out_dir is not None else project_root() / "reports"
+    out = Path(out_dir) if out_dir is not None else Path("reports")
     (out / "calibration").mkdir(parents=True, exist_ok=True)
     stored = _evaluate(cat, paper, cat.building)
     lines = (_calibration_result(cat, stored, calibrate(cat, paper))

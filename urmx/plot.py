@@ -298,9 +298,32 @@ def plot_ida_curves(ds: xr.Dataset, diaphragm: str, axes=None) -> list:
     return axes
 
 
-def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
-    """Fitted collapse fragility of each wall (colour by slenderness), one panel per
-    diaphragm, with the records' capacities as empirical distributions (dots)."""
+def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray) -> tuple | None:
+    """Pointwise 5-95 % range of the fitted probability at `x` over the bootstrap
+    resamples of the records (`urmx.fragility.bootstrap_lognormal`), or None."""
+    from scipy.special import ndtr
+
+    from .fragility import CONFIDENCE, bootstrap_lognormal
+
+    ran = np.isfinite(cap)
+    if ran.sum() < 5:
+        return None
+    try:
+        med, beta = bootstrap_lognormal(cap[ran], cen[ran], resamples=200)
+    except ValueError:
+        return None
+    ok = np.isfinite(med)
+    if not ok.any():
+        return None
+    p = ndtr(np.log(x[None, :] / med[ok, None]) / beta[ok, None])
+    a = (1.0 - CONFIDENCE) / 2.0
+    return np.quantile(p, a, axis=0), np.quantile(p, 1.0 - a, axis=0)
+
+
+def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
+    """Fitted collapse fragility of each wall (colour by slenderness) with its bootstrap
+    band (shaded: the pointwise 90 % range over 200 resamples of the records), one panel
+    per diaphragm, with the records' capacities as empirical distributions (dots)."""
     from scipy.stats import norm
 
     f, unit = _im_scale(ds)
@@ -318,6 +341,10 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None) -> list:
             if np.isfinite(med):
                 ax.plot(x, norm.cdf(np.log(x / med) / beta), color=col, lw=1.2,
                         label=f"{w}")
+                b = _band(c.collapse_intensity.values * f, c.censored.values, x) \
+                    if band else None
+                if b is not None:
+                    ax.fill_between(x, b[0], b[1], color=col, alpha=0.18, lw=0)
             cap = np.sort(c.collapse_intensity.where(c.censored == 0).values * f)
             cap = cap[np.isfinite(cap)]
             n = c.record.size
@@ -422,3 +449,58 @@ def plot_stiffening(st: dict, ds: xr.Dataset, ax=None):
     ax.legend(fontsize="x-small")
     ax.grid(True, alpha=0.3)
     return ax
+
+
+def plot_efficiency(eff: xr.Dataset, ax=None):
+    """The dispersion of the collapse capacities in each intensity measure per diaphragm
+    (`urmx.fragility_analysis.efficiency`): one dot per wall, a bar at the median over the
+    walls."""
+    ax = ax if ax is not None else panels(None, 1, ncols=1)[0]
+    if ax.figure.get_figwidth() < 8:
+        ax.figure.set_size_inches(9.0, 3.8)
+    labels = [str(x) for x in eff.diaphragm.values]
+    measures = [str(m) for m in eff.measure.values]
+    width = 0.8 / len(measures)
+    for k, im in enumerate(measures):
+        xs = np.arange(len(labels)) + (k - (len(measures) - 1) / 2) * width
+        disp = eff.dispersion.sel(measure=im).transpose("diaphragm", "wall").values
+        for i, x0 in enumerate(xs):
+            ax.plot(np.full(disp.shape[1], x0), disp[i], ".", ms=3, color=f"C{k}", alpha=0.5)
+        ax.plot(xs, np.nanmedian(disp, axis=1), "_", ms=12, mew=2.5, color=f"C{k}",
+                label=im)
+    ax.set_xticks(np.arange(len(labels)), labels, fontsize=8)
+    ax.set_ylabel("dispersion of the collapse capacity [1]")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize="x-small", ncol=len(measures), loc="upper center")
+    ax.grid(True, axis="y", alpha=0.3)
+    return ax
+
+
+def plot_collapse_risk(risk: xr.Dataset, curve, axes=None) -> list:
+    """The hazard curve (with the walls' median capacities marked) and the mean annual
+    frequency of collapse against slenderness, one line per diaphragm, per supports group
+    (`urmx.fragility_analysis.collapse_risk`)."""
+    groups = FA.supports_groups(risk) if "supports" in risk.coords else {
+        "top": [str(x) for x in risk.diaphragm.values]}
+    axes = panels(axes, 1 + len(groups), ncols=1 + len(groups))
+    f, unit = display_scale(curve.units)
+    ax = axes[0]
+    ax.loglog(curve.intensity * f, curve.rate, "k-", lw=1.5)
+    med = risk.median_collapse_intensity.values.ravel() * f
+    at = np.exp(np.interp(np.log(med), np.log(curve.intensity * f), np.log(curve.rate)))
+    ax.plot(med, at, "|", color="C3", ms=8, label="walls' medians")
+    ax.set_xlabel(f"{curve.im} [{unit}]")
+    ax.set_ylabel("mean annual frequency of exceedance [1/yr]")
+    ax.set_title("hazard curve", fontsize=9)
+    ax.legend(fontsize="x-small")
+    ax.grid(True, which="both", alpha=0.3)
+    slender = risk.slenderness if "slenderness" in risk.coords else np.arange(risk.wall.size)
+    for ax, (g, labels) in zip(axes[1:], groups.items(), strict=True):
+        for lab in labels:
+            ax.semilogy(slender, risk.rate.sel(diaphragm=lab), "o-", ms=3, label=lab)
+        ax.set_xlabel("slenderness h/t [1]")
+        ax.set_ylabel("mean annual frequency of collapse [1/yr]")
+        ax.set_title(FA.GROUPS.get(g, g), fontsize=9)
+        ax.legend(fontsize="x-small", title="diaphragm")
+        ax.grid(True, which="both", alpha=0.3)
+    return axes

@@ -2,58 +2,137 @@
 
 Obviously-correct rather than fast: every record step is integrated separately (so the
 kinks of the piecewise-linear ground motion are never inside an integration step), each
-piece uses the smooth continuation of its branch (MODEL.md section 11), events are
-found by ``solve_ivp``'s event location, and the state at an event is obtained by a
-fresh integration *to* the event time, not from the interpolant. Interior extrema of
-the peak outputs are events too (their rates crossing zero). What an event does is
-decided by the same functions as in the exact kernel (:func:`urmx.kernel.handle_event`,
+piece uses the smooth continuation of its branch (MODEL.md section 11), and the state at
+an event is obtained by a fresh integration *to* the event time, not from the interpolant.
+Events and the interior extrema of the peak outputs are found on ``solve_ivp``'s dense
+output, sampled at SAMPLES points in every solver step and, after a piece's start, at
+GEOMETRIC points approaching it geometrically: the first fall of an event function
+through zero after it has been positive (a function at zero after an event, an impact or
+a release, may come back at once, and an even number of crossings inside one step leaves
+the signs at its ends alike), and every change of sign of a peak output's rate, each
+located by brentq on the dense output. What an event does is decided by the same
+functions as in the exact kernel (:func:`urmx.kernel.handle_event`,
 :func:`urmx.kernel.active_events`, compiled with Python wrappers as ``*_py``), on the same
-piece matrices
-(:func:`urmx.kernel.tables`), so the two solvers differ only in how they integrate.
+piece matrices (:func:`urmx.kernel.tables`), so the two solvers differ only in how they
+integrate and search.
 """
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from . import kernel as K
 from .errors import InputError
 
+#: samples of the dense output per solver step, and geometric ones after a piece's start
+SAMPLES, GEOMETRIC = 16, 40
+_EPS = np.finfo(float).eps
+
 
 def _rhs(MK, MC, MR, MG, alpha, beta, n):
-    """First-order right-hand side of one piece, the ground linear in the step's time."""
+    """First-order right-hand side of one piece, x' = A x + c0 + c1 t for x = [r, r_d], the
+    ground linear in the step's time."""
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = -MK
+    A[n:, n:] = -MC
+    c0 = np.concatenate([np.zeros(n), -MR - MG * alpha])
+    c1 = np.concatenate([np.zeros(n), -MG * beta])
+
     def rhs(t, x):
-        rr, vv = x[:n], x[n:]
-        return np.concatenate([vv, -MK @ rr - MC @ vv - MR - MG * (alpha + beta * t)])
+        return A @ x + (c0 + c1 * t)
     return rhs
 
 
-def _event(row, vrow, agc, sig, kap, alpha, beta, n):
-    """Terminal event e = sig*(row.y + vrow.y_d + agc*xg_dd) + kap falling through zero
-    (urmx.kernel's form)."""
-    def ev(t, x):
-        return sig * (row @ x[:n] + vrow @ x[n:2 * n] + agc * (alpha + beta * t)) + kap
-    ev.terminal = True
-    ev.direction = -1
-    return ev
+def _samples(ts, tau):
+    """Sample times of a piece solved on the steps ts (ts[0] = tau): tau, GEOMETRIC points
+    approaching tau geometrically (down to 2^-GEOMETRIC of the first step) and SAMPLES
+    even points in every step, increasing."""
+    geo = tau + (ts[1] - tau) * 2.0 ** -np.arange(GEOMETRIC, 0, -1)
+    frac = np.arange(1, SAMPLES + 1) / SAMPLES
+    even = (ts[:-1, None] + (ts[1:] - ts[:-1])[:, None] * frac[None, :]).ravel()
+    t = np.concatenate([[tau], geo, even])
+    return t[np.r_[True, np.diff(t) > 0.0]]
 
 
-def _extremum(row, tracker, mode, alpha, beta, n):
-    """Non-terminal event at an interior extremum of a peak output (its rate is zero)."""
+def _at(tt, sol, n, mode, TR, ev, alpha, beta, X=None):
+    """Event functions, peak outputs and the outputs' rates at the times tt, on the dense
+    output of a piece (mode: its matrices; TR: tracker rows; ev: event rows, rate rows,
+    ground coefficients, signs and offsets; the ground alpha + beta t; X: the states at tt
+    if known)."""
     MK, MC, MR, MG = mode
-    if tracker < K.N_DISP:
-        def ex(t, x):
-            return row @ x[n:]
-    else:
-        def ex(t, x):
-            rr, vv = x[:n], x[n:]
-            acc = -MK @ rr - MC @ vv - MR - MG * (alpha + beta * t)
-            return row @ (-MK @ vv - MC @ acc - MG * beta) + beta
-    ex.terminal = False
-    ex.direction = 0
-    ex.tracker = tracker
-    return ex
+    S, Vr, Ag, Sg, Kp = ev
+    X = sol.sol(tt) if X is None else X
+    R, V = X[:n], X[n:2 * n]
+    a = alpha + beta * tt
+    acc = -MK @ R - MC @ V - MR[:, None] - MG[:, None] * a[None, :]
+    jerk = -MK @ V - MC @ acc - MG[:, None] * beta
+    E = Sg[:, None] * (S @ R + Vr @ V + Ag[:, None] * a[None, :]) + Kp[:, None]
+    val = np.concatenate([TR[:K.N_DISP] @ R, TR[K.N_DISP:] @ acc + a])
+    der = np.concatenate([TR[:K.N_DISP] @ V, TR[K.N_DISP:] @ jerk + beta])
+    return E, val, der
+
+
+def _root(f, a, b):
+    """brentq at the tolerance solve_ivp uses for its events."""
+    return brentq(f, a, b, xtol=4 * _EPS, rtol=4 * _EPS)
+
+
+def _noise(t, X, sol, n, ev, alpha, beta):
+    """Round-off of the event functions at the sample times t (states X) on the dense
+    output: of their terms there, and of the interpolant, which adds the step's increment
+    of each coordinate to its start and subtracts it again (about eps times the
+    increment)."""
+    S, Vr, Ag, Sg, Kp = ev
+    k = np.clip(np.searchsorted(sol.t, t, side="right") - 1, 0, sol.t.size - 2)
+    inc = np.abs(np.diff(sol.y, axis=1))[:, k]
+    terms = np.abs(S) @ np.abs(X[:n]) + np.abs(Vr) @ np.abs(X[n:2 * n]) \
+        + np.abs(Ag)[:, None] * np.abs(alpha + beta * t)[None, :] + np.abs(Kp)[:, None]
+    return 4.0 * _EPS * terms + 16.0 * _EPS * (np.abs(S) @ inc[:n] + np.abs(Vr) @ inc[n:2 * n])
+
+
+def _first_event(t, E, z, e0, ed0, at, tie):
+    """The first event of a piece: the earliest time in (t[0], t[-1]] at which an event
+    function falls through zero after having been positive, and its index; (None, -1) when
+    none does. E: the functions at the sample times t; `at`: :func:`_at` of the piece;
+    ``tie(a, b)``: whether function b is taken before a when both are due at once.
+
+    A function counts as positive once it exceeds `z` (its round-off at each sample,
+    :func:`_noise`), or at the start when it is above zero and falling (it is due at
+    once); its fall is then located between the samples around it."""
+    up = E > z
+    up[:, 0] |= (e0 > 0.0) & (ed0 < 0.0)
+    armed = np.maximum.accumulate(up, axis=1)
+    fall = np.zeros_like(up)
+    fall[:, 1:] = armed[:, :-1] & (E[:, 1:] <= 0.0)
+    best, k_best = None, -1
+    for k in np.flatnonzero(fall.any(axis=1)):
+        i = int(np.argmax(fall[k]))
+        if best is not None and t[i - 1] >= best:
+            continue
+        root = _root(lambda x, k=k: at(np.array([x]))[0][k, 0], t[i - 1], t[i])
+        if best is None or root < best or (root == best and tie(k_best, int(k))):
+            best, k_best = root, int(k)
+    return best, k_best
+
+
+def _extrema(t, val, der, peaks, at):
+    """Peaks over the interior extrema of the outputs sampled at times t (values val, rates
+    der, outputs x times): each change of sign of a rate is located by brentq on the dense
+    output (`at`: :func:`_at` of the piece) and the value there raises the peak, unless the
+    bound of the cubic between the two samples, max(|p0|, |p1|) + (t1 - t0)/4 (|d0| + |d1|),
+    cannot."""
+    np.maximum(peaks, np.abs(val).max(axis=1), out=peaks)
+    change = der[:, :-1] * der[:, 1:] < 0.0
+    bound = np.maximum(np.abs(val[:, :-1]), np.abs(val[:, 1:])) + 0.25 * np.diff(t)[None, :] \
+        * (np.abs(der[:, :-1]) + np.abs(der[:, 1:]))
+    for i, j in zip(*np.nonzero(change & (bound > peaks[:, None])), strict=True):
+        x = _root(lambda x, i=i: at(np.array([x]))[2][i, 0], t[j], t[j + 1])
+        peaks[i] = max(peaks[i], abs(at(np.array([x]))[1][i, 0]))
 
 
 def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
@@ -70,9 +149,8 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     method : {"DOP853", "Radau", "RK45", "LSODA"}
         The ``solve_ivp`` method.
     max_step : float, optional
-        Largest solver step; default ``dt/8``. solve_ivp finds an event only where its
-        function changes sign between step ends, so a shallow closure (a grazing impact)
-        inside one long step would be missed. [s]
+        Largest solver step; default ``dt/8`` (with SAMPLES samples a step, events and
+        extrema are searched at least every dt/128). [s]
     """
     ag, dt, ntail, law = K.check_inputs(wall, ground_acceleration, dt, scale, cor, impact,
                                         tail, window)
@@ -166,11 +244,6 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
             ne = K.active_events_py(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig, kap,
                                  kind, tgt)
             rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
-            evfuns = [_event(rows[k, :n].copy(), vrows[k, :n].copy(), agc[k], sig[k], kap[k],
-                             alpha, beta, n) for k in range(ne)]
-            for t_ in range(K.N_TRACK):
-                if TR[t_].any():
-                    evfuns.append(_extremum(TR[t_].copy(), t_, mode, alpha, beta, n))
             x0 = np.concatenate([r, v])
             if n == 0:  # nothing moves (both joints held): events follow the ground alone
                 x0 = np.zeros(1)
@@ -178,21 +251,25 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 def rhs(t, x):
                     return np.zeros(1)
             sol = solve_ivp(rhs, (tau, dt), x0, method=method, rtol=rtol, atol=atol,
-                            events=evfuns, max_step=max_step)
-            # interior extrema (non-terminal events) up to the end of this piece
-            t_stop = sol.t[-1]
-            for k in range(ne):
-                if sol.t_events[k].size:
-                    t_stop = min(t_stop, sol.t_events[k][0])
-            for k in range(ne, len(evfuns)):
-                for te, ye in zip(sol.t_events[k], sol.y_events[k], strict=True):
-                    if te <= t_stop:
-                        val, _ = tracker_values(mode, TR, ye[:n], ye[n:2 * n], alpha + beta * te,
-                                                beta)
-                        peaks[evfuns[k].tracker] = max(peaks[evfuns[k].tracker],
-                                                       abs(val[evfuns[k].tracker]))
-            hit = [k for k in range(ne) if sol.t_events[k].size]
-            if not hit:
+                            max_step=max_step, dense_output=True)
+            ev = (rows[:ne, :n], vrows[:ne, :n], agc[:ne], sig[:ne], kap[:ne])
+            at = partial(_at, sol=sol, n=n, mode=mode, TR=TR, ev=ev, alpha=alpha, beta=beta)
+            t_s = _samples(sol.t, tau)
+            X = sol.sol(t_s)
+            E, val, der = at(t_s, X=X)
+            e0, ed0 = event_values(ne, n, r, v, alpha + beta * tau, beta, mode)
+            z = _noise(t_s, X, sol, n, ev, alpha, beta)
+            te, k_ev = _first_event(t_s, E, z, e0, ed0, at,
+                                    lambda a, b: K.release_tie_py(ist, kind, tgt, a, b))
+            # interior extrema of the outputs up to the end of this piece
+            if te is not None:
+                keep = t_s < te
+                _, v_e, d_e = at(np.array([te]))
+                t_s = np.append(t_s[keep], te)
+                val = np.concatenate([val[:, keep], v_e], axis=1)
+                der = np.concatenate([der[:, keep], d_e], axis=1)
+            _extrema(t_s, val, der, peaks, at)
+            if te is None:
                 r, v = sol.y[:n, -1].copy(), sol.y[n:2 * n, -1].copy()
                 if ist[K.I_FAM] == 1:
                     fam1 += dt - tau
@@ -200,8 +277,6 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
                 bump(val)
                 break
-            k_ev = min(hit, key=lambda k: sol.t_events[k][0])
-            te = float(sol.t_events[k_ev][0])
             # step to the event (an interpolated state is less accurate)
             if te > tau and n:
                 s2 = solve_ivp(rhs, (tau, te), x0, method=method, rtol=rtol, atol=atol,
@@ -240,6 +315,9 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 now = np.flatnonzero(np.where(release, (e < 0.0) | ((e == 0.0) & (ed < 0.0)),
                                               (e <= 0.0) & (ed < 0.0)))
                 k_ev = int(now[0]) if now.size else -1
+                for k in now[1:]:  # both sides of a held joint: the current family's
+                    if K.release_tie_py(ist, kind, tgt, k_ev, int(k)):
+                        k_ev = int(k)
         if status != K.ST_OK:
             duration = t0 + tau
             break

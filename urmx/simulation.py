@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import __version__, variables
+from . import __version__, provenance, variables
 from .errors import InputError
 from .model import Wall
 
@@ -106,7 +106,9 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
         analysed ``ground_acceleration`` (scaled, zero in the tail) over ``time``.
         Global attributes: ``status`` ("ok", "collapsed", "event-limit"), ``duration``
         [s], ``events``, ``method``, ``cor``, ``scale``, ``impact``, ``tail``, ``dt``,
-        ``urmx_version`` and the wall's fields as ``wall_<field>``.
+        the provenance attributes of `urmx.provenance.attrs` (``urmx_version`` with the
+        git commit, ``kernel_source_hash``, library versions) and the wall's fields as
+        ``wall_<field>``.
 
     Raises
     ------
@@ -177,7 +179,8 @@ def _attrs(wall: Wall, res: dict, *, method: str, rtol: float | None, dt: float,
     if rtol is not None:
         attrs["rtol"] = float(rtol)
     attrs.update(dt=dt, scale=float(scale), cor=float(cor), impact=impact, tail=float(tail),
-                 record=source, urmx_version=__version__)
+                 record=source)
+    attrs.update(provenance.attrs())  # urmx_version (with the git commit), versions
     for key, value in wall.to_dict().items():
         attrs[f"wall_{key}"] = value if isinstance(value, str) else float(value)
     attrs["history"] = (f"urmx {__version__} simulate(method={method!r}, scale={scale:g}, "

@@ -23,12 +23,22 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "fragility-report", help="figures and tables of an IDA archive -> reports/fragility/",
-        description="IDA curves, fragility curves, median collapse intensity against "
-                    "slenderness and diaphragm frequency, and the effect of stiffening the "
-                    "diaphragm, from an archive written by `urmx ida`.")
+        description="IDA curves, fragility curves with their confidence bands, median "
+                    "collapse intensity against slenderness and diaphragm frequency, the effect "
+                    "of stiffening the diaphragm, the efficiency and sufficiency of every "
+                    "intensity measure and the collapse risk at a site, from an archive "
+                    "written by `urmx ida`.")
     p.add_argument("archive", metavar="FILE.nc", help="IDA archive")
     p.add_argument("--out", default="reports/fragility", metavar="DIR",
                    help="output folder (default: reports/fragility)")
+    p.add_argument("--hazard", metavar="CURVE.csv",
+                   help="hazard curve of the Collapse risk section (default: "
+                        "catalog/hazard/illustrative-pga-hazard.csv)")
+    p.add_argument("--spectrum", metavar="DESIGN.csv",
+                   help="design spectrum of the Collapse risk section (default: "
+                        "catalog/hazard/illustrative-design-spectrum.csv)")
+    p.add_argument("--years", type=float, default=50.0,
+                   help="exposure time of the probabilities of collapse [yr] (default 50)")
     p.set_defaults(handler=_report)
 
 
@@ -53,5 +63,6 @@ def _report(args) -> int:
 
     check_output(args.out, "--out", folder=True)
     with writing(args.out, "report folder"):
-        print(write_report(args.archive, args.out))
+        print(write_report(args.archive, args.out, hazard=args.hazard,
+                           spectrum=args.spectrum, years=args.years))
     return 0

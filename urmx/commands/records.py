@@ -25,6 +25,25 @@ def file_options(s, what: str = "a record file") -> None:
                         "mistake)")
 
 
+def record_inputs(name: str, records_dir=None) -> list[tuple[str, object]]:
+    """The files a record named on the command line is read from (the file, or a manifest
+    record's file and its manifest), as `urmx.errors.check_output` takes them: an output
+    is never one of them."""
+    from pathlib import Path
+
+    if Path(name).is_file():
+        return [("the record file", Path(name))]
+    try:
+        from urmx.records import manifest
+
+        entry = manifest(records_dir).get(name, {})
+    except Exception:  # noqa: BLE001 - an unreadable manifest is said when it is read
+        return []
+    return [(label, Path(entry[key])) for key, label in
+            (("path", f"the file of record {name!r}"), ("manifest", "the records manifest"))
+            if entry.get(key)]
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("records", help="list, measure and plot ground-motion records")
     _records_option(p, None)
@@ -102,7 +121,9 @@ def _index(args) -> int:
     from urmx.records.manifest import index, write_manifest
 
     folder = Path(args.folder)
-    out = check_output(args.out or folder / "manifest.toml")
+    read = [("the record file", f) for f in folder.glob(args.pattern or "*") if f.is_file()
+            and f.name != "manifest.toml"] if folder.is_dir() else []
+    out = check_output(args.out or folder / "manifest.toml", inputs=read)
     entries, skipped = index(folder, pattern=args.pattern or "*", dt=args.dt, unit=args.unit,
                              record_set=args.set, allow_unusual=args.allow_unusual,
                              skip_unknown=args.pattern is None)
@@ -173,7 +194,7 @@ def _run(args) -> int:
     if args.action == "plot":
         from urmx.records.plot import plot_record
 
-        check_output(args.out)
+        check_output(args.out, inputs=record_inputs(args.id, args.records))
         tr = _trace(args)
         with writing(args.out, "figure"):
             plot_record(tr, args.out, title=args.id + (f" {tr.stats.channel}"
@@ -183,7 +204,13 @@ def _run(args) -> int:
     from urmx.records.report import write_report
 
     if args.out is not None:
-        check_output(args.out)
+        from urmx.records import manifest
+
+        read = {(f"the file of record {rid!r}", e["path"]) for rid, e in
+                manifest(args.records).items() if e.get("path")}
+        read |= {("the records manifest", e["manifest"]) for e in
+                 manifest(args.records).values()}
+        check_output(args.out, inputs=sorted(read))
     with writing(args.out or "reports/records.md", "report"):
         path = write_report(args.out, args.records)
     print(f"wrote {path}")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .records import file_options
+from .records import file_options, record_inputs
 
 
 def register(subparsers) -> None:
@@ -86,9 +86,12 @@ def _run(args) -> int:
     if not (math.isfinite(args.scale) and args.scale > 0):
         raise InputError(f"--scale: scale={args.scale!r} must be a positive factor (a record "
                          "is scaled, never reversed or zeroed)")
+    read = [("the wall file", args.wall), *record_inputs(args.record, args.records)]
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:
-            check_output(path, option)
+            check_output(path, option, inputs=read, utf8=option == "--out")
+    if args.out and args.plot and check_output(args.out) == check_output(args.plot):
+        raise InputError(f"--out and --plot name the same file {args.out!r}")
     with allow_unusual_walls() if args.allow_unusual else contextlib.nullcontext():
         wall = read_wall(args.wall)
     rec = _record(args)

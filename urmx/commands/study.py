@@ -26,7 +26,7 @@ def register(sub) -> None:
 
     p = sub.add_parser("calibrate", help="fit the parametric building, write "
                        "reports/calibration.md")
-    p.add_argument("--out", default=None, help="report folder (default: the checkout's reports/)")
+    p.add_argument("--out", default=None, help="report folder (default: reports/)")
     p.set_defaults(handler=_calibrate)
 
 
@@ -51,6 +51,9 @@ def study_options(p) -> None:
                    help="cells (analyses for a grid) per batch, >= 1 (default 16); batches "
                         "are cut over every dimension, and a resumed run finds finished "
                         "cells whatever the batch size was")
+    p.add_argument("--worker-timeout", type=_seconds, default=None, metavar="SECONDS",
+                   help="on a cluster, stop the run when no worker has been left for this "
+                        "long (default 60; dask config urmx.worker-timeout)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     _size_options(p)
 
@@ -83,6 +86,25 @@ def _size_options(p) -> None:
 def size_arguments(args) -> dict:
     """The run_study keywords of `_size_options`."""
     return dict(force=args.force, max_cells=args.max_cells, max_gb=args.max_gb)
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r} must be a positive number of seconds")
+    return value
+
+
+def apply_settings(args) -> None:
+    """Put the run settings given on the command line (``--worker-timeout``) into dask's
+    configuration, where the study engine reads them (`urmx.study.clients.setting`)."""
+    if getattr(args, "worker_timeout", None) is not None:
+        import dask.config
+
+        dask.config.set({"urmx.worker-timeout": args.worker_timeout})
 
 
 def command_line() -> str:
@@ -128,6 +150,7 @@ def run_loaded(args, study) -> int:
     as ``urmx run`` does (its aliases call this too)."""
     from ..study import run_study
 
+    apply_settings(args)
     run_resumable(args, Path(args.out), lambda: run_study(
         study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
         batch_size=args.batch_size, records_dir=args.records, command=command_line(),
@@ -146,6 +169,7 @@ def _paper(args) -> int:
     out = check_output(args.out, "--out", folder=True)
     check_output(args.report, "--report", folder=True)
     check_scheduler(args.scheduler)
+    apply_settings(args)
     records_dir(args.records)  # a missing records folder is said before a cluster starts
     start = time.perf_counter()
     archives = []

@@ -55,8 +55,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..model import Wall
+from ..records.readers import check_finite
 from ..records.record import as_record
-from .intensity import IM_ATTRS, MAX_INTENSITY, check_im, record_intensity
+from .intensity import IM_ATTRS, MAX_INTENSITY, check_im, check_period_range, record_intensity
 from .mechanism import static_acceleration
 
 DEFAULT_IM = "pga"  # default intensity measure of a capacity
@@ -195,7 +196,7 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
                       rtol: float = RTOL, step: float = STEP,
                       max_intensity: float | None = None, impact: str = "scale",
                       start: float | None = None, records_dir=None,
-                      kernel=None) -> CollapseCapacity:
+                      kernel=None, period_range=None) -> CollapseCapacity:
     """Collapse capacity of one wall under one record: the smallest intensity at which it
     collapses (hunt, then bisection; first-collapse convention; module docstring).
 
@@ -207,9 +208,9 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
         Ground acceleration in m s-2 (`urmx.records.as_record`): a Trace as given, a
         manifest id or record file, or samples and their time step [s]. The record is
         analysed times its own scale factor (a manifest id at the manifest's, as studies
-        use it).
-    im : {"pga", "pgv", "sa_wall", "sa_diaphragm", "scale"}
-        Intensity measure of the capacity (module docstring).
+        use it). A record with NaN or infinite samples is refused, naming the first.
+    im : {"pga", "pgv", "sa_wall", "sa_diaphragm", "sa_avg", "scale"}
+        Intensity measure of the capacity (`urmx.fragility.intensity`).
     cor : float
         Coefficient of restitution, in (0, 1]. [1]
     rtol : float
@@ -232,6 +233,9 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
         Records folder for a manifest id.
     kernel : callable, optional
         Integrator with the signature of `urmx.kernel.run` (default).
+    period_range : (float, float), optional
+        Periods of ``im="sa_avg"`` instead of the wall's default range
+        (`urmx.fragility.sa_avg_range`). [s]
 
     Returns
     -------
@@ -256,10 +260,12 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
         raise InputError(f"step={step!r} must be greater than 1 (the ratio of the hunt's "
                          "geometric grid)")
     rec = as_record(record, records_dir)
-    acc = rec.scaled()
+    acc = check_finite(rec.scaled(), f"record {rec.id!r}", rec.dt)
     if not np.any(acc):
         raise InputError(f"record {rec.id!r} is all zeros: it cannot collapse a wall")
-    unit = record_intensity(rec, im, wall)
+    if period_range is not None:
+        period_range = check_period_range(period_range)
+    unit = record_intensity(rec, im, wall, period_range)
     max_intensity = _positive("max_intensity", MAX_INTENSITY[im] if max_intensity is None
                               else max_intensity)
     start = None if start is None else _positive("start", start)
@@ -274,6 +280,8 @@ def cell_capacity(kernel, wall: Wall, acc: np.ndarray, dt: float, unit: float, i
     [m s-2] at step `dt` [s], the record's intensity at scale 1 `unit` [units of the
     measure] (a study's batches call it directly)."""
     pga = float(np.max(np.abs(acc)))
+    if not math.isfinite(pga):
+        check_finite(acc, f"record {label!r}", dt)
     if not (unit > 0 and pga > 0):
         raise InputError(f"record {label!r} is all zeros: it cannot collapse a wall")
     if start is None:

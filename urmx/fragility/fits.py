@@ -6,6 +6,27 @@ function fitting using dynamic structural analysis", Earthquake Spectra 31(1).
 Censoring. When a wall survives ``max_intensity`` its capacity is only known to exceed it;
 the fits use it as a right-censored observation, never dropping it (that would bias the
 median low).
+
+The maximum. Both likelihoods are concave in ``(delta, theta) = (ln median / beta,
+1 / beta)`` (the censored normal: Olsen 1978, Econometrica 46; the probit of the stripes),
+so Newton's method with a backtracking line search finds their one maximum, vectorised over
+bootstrap resamples. Without censoring the maximum is the mean and the population (1/n)
+standard deviation of ``ln x``, which the iteration starts from.
+
+Confidence. Each fit carries percentile bootstrap intervals for its median and dispersion
+at `CONFIDENCE` (90 %, two-sided) from `RESAMPLES` resamples drawn with a seeded generator
+(`SEED`): the records are resampled with replacement (capacities), or the records of each
+stripe (stripe counts: binomial resampling of each stripe's collapses). Resamples that
+admit no fit (fewer than two distinct uncensored capacities; stripes perfectly separated)
+are left out and counted (``LognormalFit.resamples`` is the number kept). With fewer than
+`MIN_BOOTSTRAP` observations the intervals are NaN.
+
+Refused inputs (an `urmx.errors.InputError` naming the value): an infinite capacity, a NaN
+``censored`` flag of a capacity that is there, a capacity that is not positive, a count
+that is not a whole number, stripes whose likelihood has no maximum (one intensity level,
+or stripes perfectly separated: none collapse up to some level and all collapse above it),
+and a negative intensity in :meth:`LognormalFit.probability`. A NaN capacity is a cell not
+run and is left out, with its flag.
 """
 
 from __future__ import annotations
@@ -16,6 +37,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+
+CONFIDENCE = 0.90  # two-sided level of the bootstrap intervals [1]
+RESAMPLES = 1000  # bootstrap resamples of a fit
+SEED = 0  # seed of the bootstrap's generator (numpy default_rng)
+MIN_BOOTSTRAP = 5  # fewer observations (records or stripes x records) give no interval
+_NAN2 = (math.nan, math.nan)
 
 
 @dataclass(frozen=True)
@@ -34,6 +61,16 @@ class LognormalFit:
         Censored capacities (capacity fit) or 0.
     method : str
         ``"capacities"`` or ``"multiple-stripe"``.
+    median_ci, dispersion_ci : (float, float)
+        Percentile bootstrap interval at `confidence` (NaN when not computed).
+        [units of the intensity], [1]
+    confidence : float
+        Two-sided level of the intervals. [1]
+    resamples : int
+        Bootstrap resamples the intervals come from (those that admit a fit).
+    im, units : str or None
+        The intensity measure and its units, when known (`urmx.fragility.collapse_rate`
+        checks a hazard curve's against them).
     """
 
     median: float
@@ -41,29 +78,171 @@ class LognormalFit:
     n: int
     n_censored: int = 0
     method: str = "capacities"
+    median_ci: tuple[float, float] = _NAN2
+    dispersion_ci: tuple[float, float] = _NAN2
+    confidence: float = CONFIDENCE
+    resamples: int = 0
+    im: str | None = None
+    units: str | None = None
 
     def probability(self, intensity) -> np.ndarray:
-        """Probability of collapse at `intensity` [units of the intensity]. [1]"""
+        """Probability of collapse at `intensity` (>= 0; NaN stays NaN) [units of the
+        intensity]. [1]"""
         from scipy.stats import norm
 
         x = np.asarray(intensity, dtype=float)
+        if np.any(x < 0):
+            raise InputError(f"intensity {float(x[x < 0].flat[0])!r} is negative: a "
+                             "probability of collapse needs an intensity >= 0")
         with np.errstate(divide="ignore"):
             return norm.cdf(np.log(x / self.median) / self.dispersion)
 
 
-def _minimise(nll, x0) -> np.ndarray:
-    """Minimise a negative log-likelihood over (ln median, ln dispersion) with scipy."""
-    from scipy.optimize import minimize
+# ---- Newton's method on concave log-likelihoods, vectorised over resamples -----------------
 
-    res = minimize(nll, x0, method="Nelder-Mead",
-                   options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000})
-    if not np.isfinite(res.fun):
-        raise InputError("the lognormal fit found no finite likelihood")
-    return res.x
+def _newton(loglik, delta, theta, iters: int = 200, tol: float = 1e-13):
+    """Maximise ``loglik(delta, theta) -> (value, gradient (2, B), hessian (3, B))`` per
+    row from the start (delta, theta) by Newton steps with step halving; rows that do not
+    converge (no maximum) come back NaN."""
+    delta, theta = np.array(delta, float), np.array(theta, float)
+    value, g, h = loglik(delta, theta)
+    done = ~np.isfinite(value)
+    for _ in range(iters):
+        det = h[0] * h[2] - h[1] ** 2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sd = -(h[2] * g[0] - h[1] * g[1]) / det
+            st = -(h[0] * g[1] - h[1] * g[0]) / det
+        sd, st = np.where(done, 0.0, sd), np.where(done, 0.0, st)
+        t = np.ones_like(delta)
+        for _ in range(60):  # halve the step until the likelihood does not fall
+            nd, nt = delta + t * sd, theta + t * st
+            new, ng, nh = loglik(nd, nt)
+            ok = np.isfinite(new) & (new >= value - 1e-12 * np.abs(value))
+            if ok.all():
+                break
+            t = np.where(ok, t, t / 2)
+        ok = ok & ~done
+        delta, theta = np.where(ok, nd, delta), np.where(ok, nt, theta)
+        value = np.where(ok, new, value)
+        g = np.where(ok, ng, g)
+        h = np.where(ok, nh, h)
+        small = (np.abs(t * sd) <= tol * (1 + np.abs(delta))) & \
+            (np.abs(t * st) <= tol * (1 + np.abs(theta)))
+        done |= small | ~ok
+        if done.all():
+            break
+    bad = ~done | ~np.isfinite(value)
+    return np.where(bad, np.nan, delta), np.where(bad, np.nan, theta)
 
 
-def fit_lognormal(capacities, censored=None) -> LognormalFit:
-    """Median and dispersion of collapse capacities by maximum likelihood, with censoring.
+def _censored_loglik(y, cen, w):
+    """Log-likelihood of ``ln x`` (`y`) with right-censoring (`cen`), weights `w` (B, n),
+    in (delta, theta); value (B,), gradient (2, B), hessian entries (dd, dt, tt) (3, B)."""
+    from scipy.special import log_ndtr
+
+    def f(delta, theta):
+        d, t = delta[:, None], theta[:, None]
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            z = t * y - d
+            logsf = log_ndtr(-z)
+            haz = np.exp(-0.5 * z * z - 0.5 * math.log(2 * math.pi) - logsf)
+            curv = haz * (haz - z)
+            lv = np.where(cen, logsf, np.log(t) - 0.5 * z * z)
+            value = np.sum(w * lv, axis=1)
+            value = np.where(theta > 0, value, -np.inf)
+            gd = np.where(cen, haz, z)
+            gt = np.where(cen, -haz * y, 1.0 / t - z * y)
+            hdd = np.where(cen, -curv, -1.0)
+            hdt = np.where(cen, curv * y, y)
+            htt = np.where(cen, -curv * y * y, -1.0 / t ** 2 - y * y)
+            grad = np.array([np.sum(w * gd, 1), np.sum(w * gt, 1)])
+            hess = np.array([np.sum(w * hdd, 1), np.sum(w * hdt, 1), np.sum(w * htt, 1)])
+        return value, grad, hess
+    return f
+
+
+def _lognormal_mle(y: np.ndarray, cen: np.ndarray, w: np.ndarray):
+    """(median, dispersion) per row of weights `w` (B, n) by censored maximum likelihood;
+    NaN for rows with fewer than two distinct uncensored values."""
+    wo = w * ~cen
+    so = wo.sum(1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mu0 = (wo * y).sum(1) / so
+        var0 = (wo * (y - mu0[:, None]) ** 2).sum(1) / so
+        theta0 = 1.0 / np.sqrt(var0)
+    # two distinct uncensored values at least (a spread above rounding)
+    distinct = (so > 0) & (var0 > (1e-12 * np.maximum(1.0, np.abs(mu0))) ** 2)
+    median, dispersion = np.full(w.shape[0], np.nan), np.full(w.shape[0], np.nan)
+    if distinct.any():  # rows without a spread have no maximum: not iterated
+        rows = w[distinct]
+        delta, theta = _newton(_censored_loglik(y, cen, rows), mu0[distinct] * theta0[distinct],
+                               theta0[distinct])
+        ok = np.isfinite(theta) & (theta > 0)
+        median[distinct] = np.where(ok, np.exp(delta / theta), np.nan)
+        dispersion[distinct] = np.where(ok, 1.0 / theta, np.nan)
+    return median, dispersion
+
+
+def _interval(values: np.ndarray, confidence: float) -> tuple[float, float]:
+    a = (1.0 - confidence) / 2.0
+    return float(np.quantile(values, a)), float(np.quantile(values, 1.0 - a))
+
+
+def _check_bootstrap(confidence, resamples) -> int:
+    if not (isinstance(confidence, (int, float)) and 0.0 < confidence < 1.0):
+        raise InputError(f"confidence={confidence!r} must be a level in (0, 1), e.g. 0.9")
+    if isinstance(resamples, bool) or not isinstance(resamples, (int, np.integer)) \
+            or resamples < 0:
+        raise InputError(f"resamples={resamples!r} must be a whole number >= 0")
+    return int(resamples)
+
+
+def bootstrap_lognormal(capacities, censored=None, resamples: int = RESAMPLES,
+                        seed: int | None = SEED) -> tuple[np.ndarray, np.ndarray]:
+    """Medians and dispersions of `fit_lognormal` on records resampled with replacement
+    (the same inputs and refusals), NaN where a resample admits no fit.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Shape ``(resamples,)`` each. [units of the intensity], [1]
+    """
+    x, cen = _capacities(capacities, censored)
+    y = np.log(x)
+    rng = np.random.default_rng(seed)
+    w = rng.multinomial(y.size, np.full(y.size, 1.0 / y.size), size=int(resamples))
+    return _lognormal_mle(y, cen, w.astype(float))
+
+
+def _capacities(capacities, censored) -> tuple[np.ndarray, np.ndarray]:
+    """The capacities that are there and their censored flags (refusing what the module
+    docstring lists)."""
+    x = np.asarray(capacities, dtype=float).ravel()
+    raw = (np.zeros(x.shape) if censored is None
+           else np.asarray(censored, dtype=float).ravel())
+    if raw.shape != x.shape:
+        raise InputError(f"censored has {raw.size} entries, capacities {x.size}")
+    if np.any(np.isinf(x)):
+        raise InputError(f"capacity {float(x[np.isinf(x)][0])!r} at index "
+                         f"{int(np.argmax(np.isinf(x)))} is infinite: give the intensity "
+                         "the wall survived, flagged censored, instead")
+    keep = ~np.isnan(x)
+    if np.any(np.isnan(raw[keep])):
+        k = int(np.flatnonzero(keep & np.isnan(raw))[0])
+        raise InputError(f"censored is NaN at index {k}, where the capacity is {x[k]!r}: "
+                         "say whether the wall collapsed (0) or survived (1)")
+    x, c = x[keep], raw[keep] != 0
+    if np.any(x <= 0):
+        raise InputError(f"capacities must be positive (intensities at collapse); got "
+                         f"{float(x[x <= 0][0])!r}")
+    return x, c
+
+
+def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
+                  resamples: int = RESAMPLES, seed: int | None = SEED,
+                  im: str | None = None, units: str | None = None) -> LognormalFit:
+    """Median and dispersion of collapse capacities by maximum likelihood, with censoring,
+    and their bootstrap intervals.
 
     The likelihood (Baker 2015, truncated IDA) is the product of the lognormal density at
     every observed capacity and the probability of surviving the censoring intensity,
@@ -74,9 +253,19 @@ def fit_lognormal(capacities, censored=None) -> LognormalFit:
     ----------
     capacities : array_like
         Collapse intensities; for censored entries the intensity the wall survived.
-        NaN entries (cells not run) are ignored. [units of the intensity]
-    censored : array_like of bool, optional
-        True where the capacity is a lower bound (no collapse up to it). Default: none.
+        NaN entries (cells not run) are left out; an infinite one is refused.
+        [units of the intensity]
+    censored : array_like of bool or 0/1, optional
+        True (1) where the capacity is a lower bound (no collapse up to it). Default: none.
+        NaN where the capacity is NaN (a cell not run); NaN elsewhere is refused.
+    confidence : float
+        Two-sided level of the bootstrap intervals. [1]
+    resamples : int
+        Bootstrap resamples of the records (0: no intervals).
+    seed : int or None
+        Seed of the resampling (the same seed gives the same intervals).
+    im, units : str, optional
+        The intensity measure and its units, kept on the fit.
 
     Returns
     -------
@@ -84,49 +273,111 @@ def fit_lognormal(capacities, censored=None) -> LognormalFit:
 
     Raises
     ------
-    ValueError
-        Fewer than two distinct uncensored capacities (no dispersion can be fitted), or a
-        capacity that is not positive.
+    urmx.errors.InputError
+        Fewer than two distinct uncensored capacities (no dispersion can be fitted), a
+        capacity that is not positive or is infinite, a NaN flag of a capacity.
     """
-    from scipy.stats import norm
-
-    x = np.asarray(capacities, dtype=float).ravel()
-    c = (np.zeros(x.shape, dtype=bool) if censored is None
-         else np.asarray(censored, dtype=bool).ravel())
-    if c.shape != x.shape:
-        raise InputError(f"censored has {c.size} entries, capacities {x.size}")
-    keep = np.isfinite(x)
-    x, c = x[keep], c[keep]
-    if np.any(x <= 0):
-        raise InputError(f"capacities must be positive (intensities at collapse); got "
-                         f"{float(x[x <= 0][0])!r}")
-    lx = np.log(x)
-    obs, cen = lx[~c], lx[c]
-    if np.unique(obs).size < 2:
+    resamples = _check_bootstrap(confidence, resamples)
+    x, cen = _capacities(capacities, censored)
+    y = np.log(x)
+    obs = y[~cen]
+    if obs.size < 2 or np.ptp(obs) <= 1e-12 * max(1.0, float(np.max(np.abs(obs)))):
+        # values that differ by rounding alone are not distinct: beta would be ~1e-16
         raise InputError(f"a lognormal fit needs at least two distinct uncensored capacities "
-                         f"(got {obs.size} uncensored of {x.size})")
+                         f"(got {obs.size} uncensored of {y.size})")
+    med, disp = _lognormal_mle(y, cen, np.ones((1, y.size)))
+    ci_m, ci_d, kept = _NAN2, _NAN2, 0
+    if resamples and y.size >= MIN_BOOTSTRAP:
+        rng = np.random.default_rng(seed)
+        w = rng.multinomial(y.size, np.full(y.size, 1.0 / y.size), size=resamples)
+        bm, bd = _lognormal_mle(y, cen, w.astype(float))
+        ok = np.isfinite(bm)
+        kept = int(ok.sum())
+        if kept:
+            ci_m, ci_d = _interval(bm[ok], confidence), _interval(bd[ok], confidence)
+    return LognormalFit(float(med[0]), float(disp[0]), int(y.size), int(cen.sum()),
+                        "capacities", ci_m, ci_d, float(confidence), kept, im, units)
 
-    def nll(p):
-        mu, beta = p[0], math.exp(p[1])
-        return -(np.sum(norm.logpdf(obs, mu, beta)) + np.sum(norm.logsf(cen, mu, beta)))
 
-    mu, lb = _minimise(nll, [obs.mean(), math.log(max(obs.std(), 1e-3))])
-    return LognormalFit(float(math.exp(mu)), float(math.exp(lb)), int(x.size), int(c.sum()),
-                        "capacities")
+# ---- multiple stripes -------------------------------------------------------------------------
+
+def _counts(name: str, values, shape) -> np.ndarray:
+    """Whole-number counts (refusing fractions, NaN and infinities) broadcast to `shape`."""
+    v = np.asarray(values, dtype=float)
+    bad = ~np.isfinite(v) | (v != np.round(v))
+    if np.any(bad):
+        raise InputError(f"{name} must be whole numbers; got {float(v[bad].flat[0])!r}")
+    try:
+        return np.broadcast_to(v, shape).astype(np.int64)
+    except ValueError:
+        raise InputError(f"{name} has {v.size} entries, intensity {shape[0]}") from None
 
 
-def fit_multiple_stripe(intensity, analyses, collapses) -> LognormalFit:
+def _probit_loglik(lx, n, z):
+    """Binomial log-likelihood of collapses `z` (B, k) of `n` (k,) at ln-levels `lx` (k,)
+    in (delta, theta), ``P = Phi(theta lx - delta)``; as `_censored_loglik`."""
+    from scipy.special import log_ndtr
+
+    def f(delta, theta):
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            eta = theta[:, None] * lx - delta[:, None]
+            lp, lq = log_ndtr(eta), log_ndtr(-eta)
+            logphi = -0.5 * eta * eta - 0.5 * math.log(2 * math.pi)
+            r1, r0 = np.exp(logphi - lp), np.exp(logphi - lq)  # phi/Phi, phi/(1 - Phi)
+            value = np.sum(np.where(z > 0, z * lp, 0.0) + np.where(n > z, (n - z) * lq, 0.0),
+                           1)
+            d1 = z * r1 - (n - z) * r0
+            d2 = -z * r1 * (eta + r1) - (n - z) * r0 * (r0 - eta)
+            grad = np.array([-np.sum(d1, 1), np.sum(d1 * lx, 1)])
+            hess = np.array([np.sum(d2, 1), -np.sum(d2 * lx, 1), np.sum(d2 * lx * lx, 1)])
+        return value, grad, hess
+    return f
+
+
+def _separated(lx: np.ndarray, n: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Rows of collapses `z` (B, k) with no overlap of collapses and survivors: every level
+    with a collapse at or above every level with a survivor (no maximum)."""
+    lowest_collapse = np.where(z > 0, lx, np.inf).min(1)
+    highest_survivor = np.where(z < n, lx, -np.inf).max(1)
+    return lowest_collapse >= highest_survivor
+
+
+def _stripe_mle(lx, n, z, mid, spread):
+    """(median, dispersion) per row of collapses `z` (B, k); NaN where separated or not
+    rising."""
+    fit = ~_separated(lx, n, z)  # separated rows have no maximum: not iterated
+    median, dispersion = np.full(z.shape[0], np.nan), np.full(z.shape[0], np.nan)
+    if fit.any():
+        b = int(fit.sum())
+        delta, theta = _newton(_probit_loglik(lx, n, z[fit]), np.full(b, mid / spread),
+                               np.full(b, 1.0 / spread))
+        ok = np.isfinite(theta) & (theta > 0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            median[fit] = np.where(ok, np.exp(delta / theta), np.nan)
+            dispersion[fit] = np.where(ok, 1.0 / theta, np.nan)
+    return median, dispersion
+
+
+def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = CONFIDENCE,
+                        resamples: int = RESAMPLES, seed: int | None = SEED,
+                        im: str | None = None, units: str | None = None) -> LognormalFit:
     """Median and dispersion from counts of collapses at a few intensity levels (multiple
-    stripe analysis) by maximum likelihood with a binomial likelihood (Baker 2015).
+    stripe analysis) by maximum likelihood with a binomial likelihood (Baker 2015), and
+    their bootstrap intervals (the records of each stripe resampled: binomial counts).
 
     Parameters
     ----------
     intensity : array_like
         Intensity levels (stripes), positive. [units of the intensity]
     analyses : array_like of int
-        Number of records analysed at each level (or one number for all).
+        Number of records analysed at each level (or one number for all); whole numbers.
     collapses : array_like of int
-        Number of collapses at each level.
+        Number of collapses at each level; whole numbers.
+    confidence, resamples, seed, im, units
+        As `fit_lognormal`. The intervals take the stripes as independent (a
+        multiple-stripe analysis with its own records at each level); counts made from one
+        set of capacities (`stripe_counts`) are not, and their intervals come out too
+        narrow: bootstrap the capacities (`fit_lognormal`) instead.
 
     Returns
     -------
@@ -135,15 +386,16 @@ def fit_multiple_stripe(intensity, analyses, collapses) -> LognormalFit:
 
     Raises
     ------
-    ValueError
-        Inconsistent counts, or counts that cannot fix a lognormal (no collapse at all,
-        collapse everywhere).
+    urmx.errors.InputError
+        Counts that are not whole numbers or are inconsistent, or counts whose likelihood
+        has no maximum: no collapse at all, collapse everywhere, one intensity level, or
+        stripes perfectly separated (none collapse up to a level, all collapse above it),
+        or a collapse fraction that does not rise with intensity.
     """
-    from scipy.stats import binom, norm
-
+    resamples = _check_bootstrap(confidence, resamples)
     x = np.asarray(intensity, dtype=float).ravel()
-    n = np.broadcast_to(np.asarray(analyses), x.shape).astype(np.int64)
-    z = np.asarray(collapses).ravel().astype(np.int64)
+    n = _counts("analyses", analyses, x.shape)
+    z = _counts("collapses", collapses, np.shape(np.asarray(collapses).ravel())).ravel()
     if z.shape != x.shape:
         raise InputError(f"collapses has {z.size} entries, intensity {x.size}")
     if np.any(x <= 0) or not np.all(np.isfinite(x)):
@@ -154,18 +406,35 @@ def fit_multiple_stripe(intensity, analyses, collapses) -> LognormalFit:
         raise InputError("a multiple-stripe fit needs some stripes with survivors and some "
                          "with collapses")
     lx = np.log(x)
-
-    def nll(p):
-        mu, beta = p[0], math.exp(p[1])
-        prob = norm.cdf((lx - mu) / beta)
-        return -np.sum(binom.logpmf(z, n, prob))
-
+    if np.unique(lx).size < 2:
+        raise InputError(f"a multiple-stripe fit needs at least two intensity levels: one "
+                         f"level ({x[0]:g}) cannot fix both the median and the dispersion "
+                         "(the likelihood has no maximum)")
+    if _separated(lx, n, z[None, :])[0]:
+        lo = float(np.exp(np.where(z < n, lx, -np.inf).max()))
+        hi = float(np.exp(np.where(z > 0, lx, np.inf).min()))
+        raise InputError(f"the stripes are perfectly separated (all survive up to {lo:g}, "
+                         f"all collapse from {hi:g}): the likelihood has no maximum (the "
+                         "dispersion tends to 0); add stripes where some records collapse "
+                         "and some survive")
     frac = z / n
     mid = lx[np.argmin(np.abs(frac - 0.5))]
     spread = max(float(np.ptp(lx)) / 4.0, 0.05)
-    mu, lb = _minimise(nll, [mid, math.log(spread)])
-    return LognormalFit(float(math.exp(mu)), float(math.exp(lb)), int(n.sum()), 0,
-                        "multiple-stripe")
+    med, disp = _stripe_mle(lx, n, z[None, :], mid, spread)
+    if not np.isfinite(med[0]):
+        raise InputError("the collapse fraction does not rise with intensity over these "
+                         "stripes: the likelihood has no maximum with a positive dispersion")
+    ci_m, ci_d, kept = _NAN2, _NAN2, 0
+    if resamples and n.sum() >= MIN_BOOTSTRAP:
+        rng = np.random.default_rng(seed)
+        zb = rng.binomial(n, frac, size=(resamples, x.size))
+        bm, bd = _stripe_mle(lx, n, zb, mid, spread)
+        ok = np.isfinite(bm)
+        kept = int(ok.sum())
+        if kept:
+            ci_m, ci_d = _interval(bm[ok], confidence), _interval(bd[ok], confidence)
+    return LognormalFit(float(med[0]), float(disp[0]), int(n.sum()), 0, "multiple-stripe",
+                        ci_m, ci_d, float(confidence), kept, im, units)
 
 
 def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]:
@@ -173,17 +442,14 @@ def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]
     capacities (a wall collapses at ``x`` when its capacity is at most ``x``).
 
     A censored capacity ``c`` says nothing at levels above ``c``: those records are not
-    counted there.
+    counted there. Refuses what `fit_lognormal` refuses.
 
     Returns
     -------
     (ndarray, ndarray)
         ``analyses`` and ``collapses`` per level.
     """
-    x = np.asarray(capacities, dtype=float).ravel()
-    c = np.zeros(x.shape, bool) if censored is None else np.asarray(censored, bool).ravel()
-    keep = np.isfinite(x)
-    x, c = x[keep], c[keep]
+    x, c = _capacities(capacities, censored)
     lv = np.asarray(levels, dtype=float).ravel()
     known = ~c[None, :] | (lv[:, None] <= x[None, :])
     collapsed = ~c[None, :] & (x[None, :] <= lv[:, None])

@@ -19,7 +19,7 @@ import re
 import sys
 from pathlib import Path
 
-from ..config import project_root
+from ..config import data_dir
 from ..config import records_dir as _records_dir
 from ..errors import InputError, MissingFileError, writing
 from .errors import ChecksumError, ManifestError, UnknownFormatError, UnsupportedRecordError
@@ -29,8 +29,9 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-#: the manifest file in the source checkout
-MANIFEST = project_root() / "records" / "manifest.toml"
+#: the manifest file: records/manifest.toml of the source checkout, or the copy an
+#: installed wheel carries (`urmx.config.data_dir`)
+MANIFEST = data_dir("records") / "manifest.toml"
 #: a records folder's own manifest (``urmx records index``), read beside `MANIFEST`
 FOLDER_MANIFEST = "manifest.toml"
 _REQUIRED = ("id", "set", "event", "file", "format", "dt", "unit", "sha256", "expected_pga_g",

@@ -354,6 +354,69 @@ def _spectrum(acc, dt, periods, damping) -> dict:
     return {"sd": sd, "psv": w * sd, "psa": psa, "sa": sa, "damping": damping}
 
 
+# -- average spectral acceleration -----------------------------------------------------
+
+#: number of log-spaced periods (both ends included) of the average spectral acceleration
+SA_AVG_PERIODS = 10
+
+
+def check_period_range(period_range, name: str = "period_range") -> tuple[float, float]:
+    """A period range ``(low, high)`` of finite positive periods with low <= high [s], or an
+    InputError naming it."""
+    try:
+        low, high = (float(v) for v in period_range)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}={period_range!r} must be two periods (low, high) in "
+                         "seconds") from None
+    if not (np.isfinite(low) and np.isfinite(high) and 0.0 < low <= high):
+        raise InputError(f"{name}={period_range!r} must be two finite periods with "
+                         "0 < low <= high [s]")
+    return low, high
+
+
+def average_periods(period_range, n: int = SA_AVG_PERIODS) -> np.ndarray:
+    """The `n` log-spaced periods of ``period_range = (low, high)``, both ends included. [s]"""
+    low, high = check_period_range(period_range)
+    return np.geomspace(low, high, int(n))
+
+
+def geometric_mean_psa(acceleration, dt: float, periods, damping: float = 0.05) -> np.ndarray:
+    """Geometric mean over the last axis of `periods` [s] of the pseudo-spectral
+    acceleration of samples [m s-2] at step `dt` [s], in one pass of the exact recursion
+    over the distinct periods, numpy only. [m s-2]"""
+    p = np.asarray(periods, dtype=float)
+    uniq, inv = np.unique(p.ravel(), return_inverse=True)
+    psa = pseudo_spectral_acceleration(acceleration, dt, uniq, damping)[inv].reshape(p.shape)
+    with np.errstate(divide="ignore"):
+        return np.exp(np.mean(np.log(psa), axis=-1))
+
+
+def average_spectral_acceleration(trace, period_range, n: int = SA_AVG_PERIODS,
+                                  damping: float = 0.05) -> float:
+    """Average spectral acceleration ``sa_avg`` (Eads, Miranda & Lignos 2015, EESD 44):
+    the geometric mean of the pseudo-spectral acceleration at `n` log-spaced periods over
+    `period_range`.
+
+    Parameters
+    ----------
+    trace : obspy.Trace or (array, dt)
+        Ground acceleration [m s-2] (with its time step [s] for an array).
+    period_range : (float, float)
+        Shortest and longest period, both included. [s]
+    n : int
+        Number of periods. [1]
+    damping : float
+        Damping ratio. [1]
+
+    Returns
+    -------
+    float
+        Proportional to the record's amplitude. [m s-2]
+    """
+    acc, dt = _series(as_trace(trace))
+    return float(geometric_mean_psa(acc, dt, average_periods(period_range, n), damping))
+
+
 # -- all scalar measures ---------------------------------------------------------------
 
 #: the scalar measures of :func:`measures`, in order (units and long names: the registry)
@@ -394,7 +457,8 @@ class _Intermediates:
         return np.sqrt(np.mean(self.acc[win] ** 2)) if win.any() else 0.0
 
 
-def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Dataset:
+def measures(trace, periods=None, damping: float = 0.05, names=None,
+             sa_avg_range=None) -> xr.Dataset:
     """Scalar intensity measures of an acceleration trace.
 
     PGV and PGD come from trapezoidal integration of the trace as given; process
@@ -408,10 +472,13 @@ def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Datas
         Natural periods at which to add the pseudo-spectral acceleration ``psa(period)``
         (`response_spectrum`; period 0 gives the PGA). [s]
     damping : float
-        Damping ratio of ``psa``. [1]
+        Damping ratio of ``psa`` and ``sa_avg``. [1]
     names : sequence of str, optional
         Only these scalar measures (default: all); each is computed only when asked for
         (``["pga", "pgv"]`` skips the Fourier spectra).
+    sa_avg_range : (float, float), optional
+        Adds ``sa_avg``, the average spectral acceleration over these periods
+        (`average_spectral_acceleration`, `SA_AVG_PERIODS` log-spaced periods). [s]
 
     Returns
     -------
@@ -420,7 +487,8 @@ def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Datas
         [m s-1], ``significant_duration`` [s], ``cav`` [m s-1], ``rms_acceleration``
         [m s-2], ``significant_frequency_low``/``_high`` [Hz],
         ``predominant_frequency`` [Hz], ``duration`` [s], ``dt`` [s]; each with
-        ``units`` and ``long_name``; with `periods`, also ``psa(period)`` [m s-2].
+        ``units`` and ``long_name``; with `periods`, also ``psa(period)`` [m s-2]; with
+        `sa_avg_range`, also ``sa_avg`` [m s-2].
     """
     import xarray as xr
 
@@ -449,4 +517,10 @@ def measures(trace, periods=None, damping: float = 0.05, names=None) -> xr.Datas
     if periods is not None:
         rs = response_spectrum(trace, np.atleast_1d(np.asarray(periods, dtype=float)), damping)
         ds["psa"] = rs.psa.assign_attrs(damping=damping)
+    if sa_avg_range is not None:
+        low, high = check_period_range(sa_avg_range, "sa_avg_range")
+        value = geometric_mean_psa(acc, dt, average_periods((low, high)), damping)
+        ds["sa_avg"] = ((), float(value), {**attrs("sa_avg"), "damping": damping,
+                                          "period_range": [low, high],
+                                          "periods": SA_AVG_PERIODS})
     return ds

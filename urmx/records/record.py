@@ -39,8 +39,26 @@ class Record:
         The record's own scale factor (the manifest's, or a study's override): the record
         is analysed as ``acceleration * scale_factor``. [1]
     digest : str
-        First 16 hex digits of the SHA-256 of the samples' bytes (computed when not given);
-        batch keys hold it, so a part computed on other samples is never reused.
+        First 16 hex digits of the SHA-256 of the samples' bytes and, for a record read
+        from a file, of the file's SHA-256 (computed when not given); batch keys hold it,
+        so a part computed on other samples, or on another version of the file, is never
+        reused.
+    file : str
+        Provenance (empty when the record comes from no file): the record file as its
+        study file or manifest names it (relative to the study file or the records
+        folder).
+    sha256 : str
+        SHA-256 of the file's bytes (hex).
+    format : str
+        The file's format (``urmx.records.FORMATS`` or an ObsPy format name).
+    channel : str
+        The channel read (``""`` for files with one unnamed channel).
+    unit : str
+        Unit of the values in the file (stated by it or given).
+    source : str
+        Where the record is declared: ``manifest <file>`` or ``study <file> [records.<id>]``.
+    processing : tuple of str
+        What reading did (format, unit conversion, resampling).
     """
 
     id: str
@@ -48,26 +66,77 @@ class Record:
     dt: float
     scale_factor: float = 1.0
     digest: str = ""
+    file: str = ""
+    sha256: str = ""
+    format: str = ""
+    channel: str = ""
+    unit: str = ""
+    source: str = ""
+    processing: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         self.acceleration = np.ascontiguousarray(self.acceleration, dtype=np.float64)
+        self.processing = tuple(self.processing)
         if not self.digest:
-            self.digest = hashlib.sha256(self.acceleration.tobytes()).hexdigest()[:16]
+            h = hashlib.sha256(self.acceleration.tobytes())
+            if self.sha256:  # the file too: an edited file never keys as the old one
+                h.update(f"\0file sha256 {self.sha256}".encode())
+            self.digest = h.hexdigest()[:16]
 
     @property
     def pga(self) -> float:
         """Peak of the unscaled samples. [m s-2]"""
         return float(np.max(np.abs(self.acceleration)))
 
+    @property
+    def npts(self) -> int:
+        """Number of samples. [1]"""
+        return int(self.acceleration.size)
+
+    def provenance(self) -> dict[str, Any]:
+        """Where the record comes from, by the names of a study archive's coordinates on
+        its ``record`` dimension (`PROVENANCE`; empty strings when it comes from no file)."""
+        return {"record_file": self.file, "record_sha256": self.sha256,
+                "record_format": self.format, "record_channel": self.channel,
+                "record_unit": self.unit, "record_source": self.source,
+                "record_processing": "; ".join(self.processing),
+                "record_npts": self.npts}
+
     def scaled(self) -> np.ndarray:
         """The samples as analysed: ``acceleration * scale_factor``. [m s-2]"""
         return np.ascontiguousarray(self.acceleration * self.scale_factor, dtype=np.float64)
 
     @classmethod
-    def from_trace(cls, trace, id: str | None = None, scale_factor: float = 1.0) -> Record:
-        """A Record of an ObsPy Trace's samples (as given) and time step."""
-        return cls(str(trace.id) if id is None else id, trace.data, float(trace.stats.delta),
-                   float(scale_factor))
+    def from_trace(cls, trace, id: str | None = None, scale_factor: float = 1.0,
+                   **provenance: Any) -> Record:
+        """A Record of an ObsPy Trace's samples (as given) and time step; its provenance
+        from what the reader and the manifest put in ``stats`` (``stats.record``: format,
+        unit in the file, sha256; ``stats.channel``, ``stats.processing``), where a
+        `provenance` field given here wins."""
+        stats = trace.stats
+        got = stats.get("record") or {}
+        found = dict(sha256=got.get("sha256") or "", format=got.get("format") or "",
+                     unit=got.get("unit_in_file") or "",
+                     channel=str(stats.get("channel") or "") if got else "",
+                     processing=tuple(stats.get("processing") or ()) if got else ())
+        found.update(provenance)
+        return cls(str(trace.id) if id is None else id, trace.data, float(stats.delta),
+                   float(scale_factor), **found)
+
+    @classmethod
+    def from_file(cls, rf, id: str, scale_factor: float = 1.0, **provenance: Any) -> Record:
+        """A Record of one channel of a record file as `urmx.records.describe` gives it
+        (a `urmx.records.RecordFile`: samples, dt and their provenance)."""
+        found = dict(file=rf.name, sha256=rf.sha256, format=rf.format, channel=rf.channel,
+                     unit=rf.unit, processing=rf.processing)
+        found.update(provenance)
+        return cls(id, np.array(rf.data), rf.dt, float(scale_factor), **found)
+
+
+#: the coordinates of a study archive's ``record`` dimension that say where each record
+#: comes from (:meth:`Record.provenance`), besides ``record_dt``, ``pga`` and ``scale_factor``
+PROVENANCE = ("record_file", "record_sha256", "record_format", "record_channel",
+              "record_unit", "record_source", "record_processing", "record_npts")
 
 
 def load_named(name: str | os.PathLike, records_dir: str | os.PathLike | None = None):

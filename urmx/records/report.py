@@ -7,7 +7,7 @@ import time
 import warnings
 from pathlib import Path
 
-from ..config import UrmxWarning, project_root
+from ..config import UrmxWarning
 from ..markdown import table
 from .manifest import load, manifest
 from .measures import measures, response_spectrum
@@ -39,8 +39,8 @@ def write_report(out: str | os.PathLike | None = None, records_dir=None) -> Path
     Parameters
     ----------
     out : str or path-like, optional
-        Markdown file (default ``reports/records.md``); figures go to
-        ``reports/records/`` beside it.
+        Markdown file (default ``reports/records.md`` of the current folder); figures go
+        to ``records/`` beside it.
     records_dir : str or path-like, optional
         Records directory (default :func:`urmx.config.records_dir`).
 
@@ -52,7 +52,7 @@ def write_report(out: str | os.PathLike | None = None, records_dir=None) -> Path
     from .plot import plot_record
     from .processing import scale
 
-    out = Path(out) if out is not None else project_root() / "reports" / "records.md"
+    out = Path(out) if out is not None else Path("reports") / "records.md"
     fig_dir = out.parent / "records"
     fig_dir.mkdir(parents=True, exist_ok=True)
     entries = manifest(records_dir)

@@ -10,7 +10,7 @@ names. The kind-blind engine runs them all:
 - `urmx.study.engine`: :func:`run_study`, :func:`run_grid`, :func:`batch_tasks`, the compute
   loop (:func:`compute`);
 - `urmx.study.limits`: a study's size before it runs (:func:`size_of`, :func:`check_size`,
-  :data:`MAX_CELLS`, :data:`MAX_GB`);
+  :data:`MAX_CELLS`, :data:`MAX_GB`) and what one dimension may hold (:data:`MAX_VALUES`);
 - `urmx.study.cells`: the cells of a study and their identities (:class:`Cells`);
 - `urmx.study.batches`: :class:`Batch`, the blocks of cells work is cut into (:class:`Cut`);
 - `urmx.study.parts`: the part store of resumable archives (:class:`PartStore`) and the
@@ -23,8 +23,10 @@ names. The kind-blind engine runs them all:
 - `urmx.study.dataset`: the status vocabulary (:data:`STATUS`), the shared coordinates
   (:func:`grid_coords`) and global attributes (:func:`global_attrs`);
 - `urmx.study.archive`: :func:`open_study`;
-- `urmx.study.samples`: :func:`resolve_records`, a study's records as
-  `urmx.records.Record`.
+- `urmx.study.summary`: :func:`info` (what an archive holds and how it was made) and
+  :func:`diff` (what differs between two archives), ``urmx info`` and ``urmx diff``;
+- `urmx.study.samples`: :func:`resolve_records`, a study's records (manifest ids and the
+  study file's own record files) as `urmx.records.Record`, with their provenance.
 
 The names are loaded on first use so that `urmx.catalog` can reach the kinds (to parse a
 study's ``[study.<kind>]`` table) without importing the engine, which imports the catalog.
@@ -38,7 +40,7 @@ _PUBLIC = {
     "run_study": "engine", "run_grid": "engine", "batch_tasks": "engine", "compute": "engine",
     "last_run": "engine", "RunStats": "engine",
     "size_of": "limits", "check_size": "limits", "SizeError": "limits",
-    "MAX_CELLS": "limits", "MAX_GB": "limits",
+    "MAX_CELLS": "limits", "MAX_GB": "limits", "MAX_VALUES": "limits",
     "Cells": "cells",
     "Batch": "batches", "Cut": "batches",
     "PartStore": "parts", "Lock": "parts",
@@ -48,11 +50,12 @@ _PUBLIC = {
     "STATUS": "dataset", "NOT_RUN": "dataset", "VALID": "dataset", "MISSING": "dataset",
     "grid_coords": "dataset", "global_attrs": "dataset", "status_names": "dataset",
     "open_study": "archive",
+    "info": "summary", "diff": "summary", "format_info": "summary", "format_diff": "summary",
     "resolve_records": "samples", "RecordData": "samples",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
 _SUBMODULES = ("engine", "limits", "cells", "batches", "parts", "sources", "clients",
-               "progress", "dataset", "archive", "samples", "kinds")
+               "progress", "dataset", "archive", "samples", "kinds", "summary")
 __all__ = sorted(_PUBLIC)
 
 

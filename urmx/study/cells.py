@@ -55,7 +55,11 @@ def digest64(value: Any) -> int:
 
 
 def _plain(value: Any) -> Any:
-    """A kind's settings as plain values (a dataclass as its dict)."""
+    """A kind's settings as plain values: its ``to_dict()`` where it has one (settings
+    added later leave out their defaults there, so earlier keys stay), else a dataclass as
+    its dict."""
+    if callable(getattr(value, "to_dict", None)):
+        return value.to_dict()
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return dataclasses.asdict(value)
     return value

@@ -55,21 +55,24 @@ def coord(name: str, dims: Any, values: Any) -> xr.Variable:
     return xr.Variable(dims, values, attrs=variables.attrs(name))
 
 
-def global_attrs(study: Any, started: str, command: str | None) -> dict[str, str]:
-    """Global attributes of a study archive (title, CF convention, ``history`` with the
-    time `started` and the `command`, the urmx version, the study file's text); shared by
-    every study kind."""
+def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any]:
+    """Global attributes of a study archive, shared by every study kind: title, CF
+    convention, ``history`` (the time `started`, the urmx version, the `command`), the study
+    (``study_name``, ``study``: the study file's text) and how it was made
+    (`urmx.provenance.attrs`: ``urmx_version`` with the git commit, ``urmx_git_commit``,
+    ``urmx_git_dirty``, ``kernel_source_hash`` and the Python and library versions)."""
     from .. import __version__
+    from ..provenance import attrs
 
     cmd = command or f"urmx.run_study({study.name!r})"
     return {
         "title": study.title or study.name,
         "Conventions": "CF-1.8",
         "history": f"{started} urmx {__version__}: {cmd}",
-        "urmx_version": __version__,
         "study_name": study.name,
         "study": study.text,
         "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
+        **attrs(),
     }
 
 
@@ -113,8 +116,13 @@ def _diaphragm_coords(study: Any) -> dict[str, xr.Variable]:
 
 
 def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
+    """The record dimension: ids, peaks, scale factors, time steps, and where each record
+    comes from (`urmx.records.record.PROVENANCE`: file, SHA-256, format, channel, unit,
+    source, processing, points; empty strings for records given in memory)."""
+    from ..records.record import PROVENANCE
+
     recs = [records[r] for r in study.records]
-    return {
+    coords = {
         "record": coord("record", "record", np.array(study.dims["record"], dtype=object)),
         "pga": coord("pga", "record", np.array([r.pga for r in recs])),
         "scale_factor": coord("scale_factor", "record",
@@ -123,6 +131,12 @@ def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
                             np.array([r.pga * r.scale_factor for r in recs])),
         "record_dt": coord("record_dt", "record", np.array([r.dt for r in recs])),
     }
+    given = [r.provenance() for r in recs]
+    for name in PROVENANCE:
+        values = [g[name] for g in given]
+        coords[name] = coord(name, "record", np.array(
+            values, dtype=np.int64 if name == "record_npts" else object))
+    return coords
 
 
 def grid_coords(study: Any, records: dict) -> dict[str, xr.Variable]:

@@ -38,6 +38,17 @@ How a run goes (:func:`run_study`):
 
 Counts of the last run (cells found in parts, taken from the archive, computed): :func:`last_run`.
 
+Schedulers (`urmx.study.clients`): the client already active in the process is used, a
+small study runs in this process (:func:`compute`); on a cluster, every worker must run
+this process's code (checked when the run connects and on every result), a worker lost
+mid-run is survived (dask reruns its batches, and the record samples are tasks it can
+recompute, not scattered data), and a cluster left with no worker, or whose scheduler
+goes away, stops the run with a `urmx.errors.RunError` instead of a hang.
+
+Outputs: the archive path is resolved and checked (a test file written in its folder, no
+input file of the run) before any work (`urmx.errors.check_output`); a failure to write
+a part or the archive says how many finished batches are kept.
+
 Schedulers (`urmx.study.clients`): a worker lost mid-run is survived: dask reruns its
 batches, and the record samples are tasks it can recompute, not scattered data.
 
@@ -51,7 +62,8 @@ import datetime as _dt
 import itertools
 import os
 import shutil
-from collections.abc import Callable, Iterator
+import time
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -61,10 +73,25 @@ import numpy as np
 from ..catalog import Study, load_study
 from ..errors import InputError, OutputError, RunError, check_output
 from ..netcdf import write_netcdf
+from ..provenance import differs
 from . import kinds
 from .batches import Batch, Cut
 from .cells import Cells
-from .clients import check_scheduler, close_client, get_client, record_samples
+from .clients import (
+    Watch,
+    active_client,
+    check_scheduler,
+    check_workers,
+    fetch_all,
+    get_client,
+    mismatch,
+    quiet_client,
+    record_samples,
+    release,
+    run_stamped,
+    setting,
+    worker_timeout,
+)
 from .dataset import global_attrs
 from .limits import MAX_CELLS, MAX_GB, check_size
 from .parts import Lock, PartStore, batch_key
@@ -150,58 +177,150 @@ def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
     """Run the batches (each through `runner`, a kind's ``run``) and hand each result to
     `on_result` as it arrives.
 
-    ``scheduler=None`` runs a single batch in this process (no cluster for one batch);
-    any scheduler given explicitly is used. A worker lost mid-run is survived: dask runs
-    its batches again elsewhere (up to its ``allowed-failures``), and the record samples
-    are tasks it can recompute.
+    ``scheduler=None`` uses the ``distributed.Client`` already active in this process when
+    there is one; else a study small enough runs in this process (:func:`_in_process`),
+    and a larger one on a local cluster. ``"serial"`` runs in this process; any other
+    scheduler given is used. On a cluster, every worker must run this process's code
+    (`urmx.study.clients.check_workers`, before any work; each result's identity is
+    checked again as it arrives), the cluster is watched (`urmx.study.clients.Watch`: the
+    scheduler gone, or no worker for ``urmx.worker-timeout`` seconds, is a
+    `urmx.errors.RunError`), and a worker lost mid-run is survived: dask runs its batches
+    again elsewhere (up to its ``allowed-failures``), and the record samples are tasks it
+    can recompute. Batches go to dask a window at a time (:func:`_window`), so the
+    scheduler, the workers and this process hold few of them at once.
     """
+    _compute_all(iter(tasks), sum(b.size for b, _ in tasks), records, rec_ids, scheduler,
+                 on_result, runner)
+
+
+def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str],
+                 scheduler: Any, on_result: Callable, runner: Callable) -> None:
+    """:func:`compute` over batches made as they are needed (`total`: their cells)."""
     check_scheduler(scheduler)
-    if scheduler == "serial" or (scheduler is None and len(tasks) <= 1):
-        for batch, task in tasks:
-            on_result(batch, runner(task, records[rec_ids[batch.record]].acceleration))
+    if scheduler == "serial":
+        _here(batches, records, rec_ids, on_result, runner)
         return
-    client, owned = get_client(scheduler)
-    futures: dict = {}
-    try:
-        _submit(client, tasks, records, rec_ids, runner, futures)
-        _gather(futures, on_result)
-    finally:
-        if owned:  # a cluster urmx started is closed with its work
-            close_client(client)
-        elif futures:
-            client.cancel([f for f, _ in futures.values()])
+    if scheduler is None and active_client() is None:
+        batches = _in_process(batches, total, records, rec_ids, on_result, runner)
+    first = list(itertools.islice(batches, 1))
+    if not first:
+        return
+    client, owned = _client(scheduler)
+    with quiet_client():
+        try:
+            watch = Watch(client, worker_timeout())
+            check_workers(client, watch.timeout)
+            for chunk in _windows(itertools.chain(first, batches), _window(client, first)):
+                pending: dict = {}
+                try:
+                    _submit(client, chunk, records, rec_ids, runner, pending)
+                    _gather(pending, on_result, watch)
+                finally:
+                    if pending and not owned:
+                        release(client, False, [f for f, _ in pending.values()])
+        finally:
+            if owned:
+                release(client, True, [])
+
+
+def _here(tasks: Iterable, records: dict, rec_ids: list[str], on_result: Callable,
+          runner: Callable) -> Iterator:
+    """Run `tasks` in this process, one at a time; nothing is left."""
+    for batch, task in tasks:
+        on_result(batch, runner(task, records[rec_ids[batch.record]].acceleration))
+    return iter(())
+
+
+def serial_estimate(seconds: float, size: int, total: int) -> float:
+    """The time a study of `total` cells would take in this process, from a batch of
+    `size` cells that took `seconds`. [s]"""
+    return seconds * total / max(size, 1)
+
+
+def _in_process(tasks: Iterator, total: int, records: dict, rec_ids: list[str],
+                on_result: Callable, runner: Callable) -> Iterator:
+    """Run a small study in this process and return the batches left for a cluster.
+
+    The rule: a study of one batch runs here. Otherwise the kernel is loaded and the
+    first batch runs here, timed; when that time per cell times the `total` cells to
+    compute (:func:`serial_estimate`) is below ``urmx.serial-below`` seconds (dask config,
+    default 10: less than starting a local cluster and sharing the work would save), the
+    other batches run here too; else they go to a local cluster.
+    """
+    first = list(itertools.islice(tasks, 2))
+    if len(first) <= 1:
+        return _here(first, records, rec_ids, on_result, runner)
+    from ..kernel import warm_up
+
+    warm_up()  # loading (or compiling) the kernel is not the study's cost
+    start = time.perf_counter()
+    _here(first[:1], records, rec_ids, on_result, runner)
+    estimate = serial_estimate(time.perf_counter() - start, first[0][0].size, total)
+    rest = itertools.chain(first[1:], tasks)
+    if estimate < setting("serial-below"):
+        return _here(rest, records, rec_ids, on_result, runner)
+    return rest
 
 
 def _submit(client: Any, tasks: list, records: dict, rec_ids: list[str],
             runner: Callable, futures: dict) -> None:
-    """Submit each record's samples once and every batch on them (into `futures`)."""
+    """Submit each record's samples once and every batch on them (into `futures`), each
+    batch stamped with the identity of the code that runs it
+    (`urmx.study.clients.run_stamped`)."""
     acc = {}
     for rid in {rec_ids[b.record] for b, _ in tasks}:
         acc[rid] = client.submit(record_samples, records[rid].acceleration,
                                  key=f"urmx-record-{records[rid].digest}", pure=False)
     for batch, task in tasks:
-        f = client.submit(runner, task, acc[rec_ids[batch.record]],
+        f = client.submit(run_stamped, runner, task, acc[rec_ids[batch.record]],
                           key=f"urmx-batch-{batch.key}", pure=False)
         futures[f.key] = (f, batch)
 
 
-def _gather(futures: dict, on_result: Callable[[Batch, dict], None]) -> None:
-    """Hand each finished batch to `on_result`; a batch the cluster lost for good is a
-    `urmx.errors.RunError`."""
+def _gather(futures: dict, on_result: Callable[[Batch, dict], None], watch: Watch) -> None:
+    """Hand each finished batch to `on_result` (and forget its future, so the cluster
+    frees it), checking the cluster while none arrives. Results are fetched in the
+    client's event loop (`urmx.study.clients.fetch_all`), so a result that can no longer
+    be fetched (its worker gone, the batch rescheduled on a cluster with no worker) never
+    blocks this loop. A batch the cluster lost for good, the scheduler gone, no worker
+    left, or a result from other code is a `urmx.errors.RunError`."""
+    import queue
+
+    arrived = fetch_all([f for f, _ in futures.values()])
+    while futures:
+        try:
+            f, outcome = arrived.get(timeout=watch.period / 2)
+        except queue.Empty:
+            watch.check()
+            continue
+        _take(f, outcome, futures.pop(f.key)[1], on_result, watch)
+
+
+def _take(future: Any, outcome: Any, batch: Batch, on_result: Callable[[Batch, dict], None],
+          watch: Watch) -> None:
+    """Check one finished batch's outcome (its result, or the exception fetching it
+    raised) and hand the result to `on_result`."""
     from concurrent.futures import CancelledError
 
-    from distributed import KilledWorker, as_completed
+    from distributed import KilledWorker
 
-    for f in as_completed([f for f, _ in futures.values()]):
-        try:
-            result = f.result()
-        except KilledWorker:
-            raise RunError(f"batch {futures[f.key][1].key} was running on every worker "
-                           "that died (dask's allowed-failures)") from None
-        except CancelledError:
-            raise RunError(f"dask cancelled batch {futures[f.key][1].key} (the cluster "
-                           "lost it)") from None
-        on_result(futures[f.key][1], result)
+    if isinstance(outcome, KilledWorker):
+        raise RunError(f"batch {batch.key} was running on every worker that died (dask's "
+                       "allowed-failures)") from None
+    if isinstance(outcome, (CancelledError, OSError)):
+        if getattr(outcome, "reason", "") == "scheduler-connection-lost":
+            raise watch.gone()
+        watch.check(now=True)  # the scheduler gone says so
+        if isinstance(outcome, OSError):
+            raise RunError(f"the result of batch {batch.key} could not be fetched from the "
+                           f"cluster: {outcome}") from None
+        raise RunError(f"dask cancelled batch {batch.key} (the cluster lost it)")
+    if isinstance(outcome, BaseException):
+        raise outcome  # a bug in the kind: its own traceback
+    if differs(outcome["identity"]):
+        raise mismatch(outcome["worker"], outcome["identity"], f"its result of batch "
+                       f"{batch.key} is not kept")
+    on_result(batch, outcome["result"])
 
 
 def _now() -> str:
@@ -245,26 +364,6 @@ def _client(scheduler: Any) -> tuple[Any, bool]:
 
     with dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG}):
         return get_client(scheduler)
-
-
-def _compute_all(batches: Iterator, records: dict, rec_ids: list[str], scheduler: Any,
-                 on_result: Callable, runner: Callable) -> None:
-    """Run the batches (`compute`): in this process one at a time, or on one client a
-    window at a time (`_window`); a single batch with no scheduler named runs in this
-    process."""
-    first = list(itertools.islice(batches, 2))
-    batches = itertools.chain(first, batches)
-    if scheduler == "serial" or (scheduler is None and len(first) <= 1):
-        for batch in batches:
-            compute([batch], records, rec_ids, "serial", on_result, runner)
-        return
-    client, owned = _client(scheduler)
-    try:
-        for chunk in _windows(batches, _window(client, first)):
-            compute(chunk, records, rec_ids, client, on_result, runner)
-    finally:
-        if owned:
-            close_client(client)
 
 
 def _saver(cells: Cells, sources: Sources, bar: Progress, stats: RunStats) -> Callable:
@@ -343,13 +442,14 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
         bar.note(line)
     batches = (_made(cells, b, records, kernel) for b in cut)
     try:
-        _compute_all(batches, records, study.records, scheduler,
-                     _saver(cells, sources, bar, stats), kind.run)
+        _compute_all(batches, stats.runs - stats.from_parts - stats.from_archive, records,
+                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run)
     except RunError as exc:
-        if store is None or not store.count():
+        kept = store.count() if store is not None else 0
+        if not kept:
             raise
-        done = stats.from_parts + stats.from_archive + stats.computed
-        raise RunError(f"{exc}; {done:,} of {stats.runs:,} {kind.unit} are kept in "
+        left = sum(1 for _ in Cut(cells, batch_size, sources.done()))
+        raise RunError(f"{exc}; {kept} of {kept + left} batches are kept in "
                        f"{str(store.folder)!r}: run again to resume") from None
     finally:
         bar.close()
@@ -420,9 +520,37 @@ def _check_batch_size(batch_size: Any) -> None:
                          "(cells of the study's kind per batch)")
 
 
-def _parts_folder(out: str | os.PathLike) -> tuple[Path, Path]:
-    """(the checked archive path, its parts folder)."""
-    out = check_output(out, "archive")
+def input_files(study: Study, records_dir: str | os.PathLike | None = None
+                ) -> list[tuple[str, Path]]:
+    """The files a study run reads, each with what it is: the study file, the record files
+    it declares itself (``[records.<id>]``), and the records manifest and file of each of
+    its manifest records (as far as the manifest can be read: a bad one is said when the
+    records are loaded)."""
+    from .. import records as rec
+    from ..errors import UrmxError
+
+    found = [("the study file", Path(study.path))] if study.path is not None else []
+    found += [(f"the file of record {rid!r}", Path(own.path))
+              for rid, own in study.own_records.items()]
+    try:
+        entries = rec.manifest(records_dir)
+    except (UrmxError, OSError):
+        return found
+    for rid in study.records:
+        entry = entries.get(rid, {})
+        for key, label in (("path", f"the file of record {rid!r}"),
+                           ("manifest", "the records manifest")):
+            if entry.get(key):
+                found.append((label, Path(entry[key])))
+    return found
+
+
+def _parts_folder(out: str | os.PathLike, inputs: list[tuple[str, Path]] = ()
+                  ) -> tuple[Path, Path]:
+    """(the checked archive path, resolved; its parts folder): an archive that is one of
+    the run's `inputs`, a name that is not UTF-8, or a folder where no test file can be
+    written is refused before any work."""
+    out = check_output(out, "archive", inputs=inputs, utf8=True)
     parts = out.with_name(out.name + ".parts")
     if parts.exists() and not parts.is_dir():
         raise OutputError(f"{str(parts)!r} is in the way of the archive's parts folder: "
@@ -504,12 +632,17 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         netCDF archive to write. Finished batches are kept in ``<out>.parts/`` until the
         archive is written, so an interrupted run resumes where it stopped; an earlier
         archive of the same study (its ``study_name``) lends every cell it holds (module
-        docstring). Checked before any work (a folder, or a place that cannot be written,
-        is refused); a second run on the same archive while one is running stops with a
-        `urmx.errors.RunError`.
+        docstring). Resolved (symbolic links, ``..``) and checked before any work: a
+        folder, a place where a test file cannot be written (no permission, a full disk), a
+        name that is not UTF-8, or an input of the run (the study file, a record's file,
+        the records manifest) is refused; a second run on the same archive while one is
+        running stops with a `urmx.errors.RunError`.
     scheduler : None, "serial", "threads", "processes", address or distributed.Client
-        Where batches run (`urmx.study.clients`). Default: local worker processes, one per
-        core (a study of one batch runs in this process).
+        Where batches run (`urmx.study.clients`). Default: the ``distributed.Client``
+        already active in this process, else this process for a small study (estimated
+        under ``urmx.serial-below`` seconds, :func:`compute`), else local worker
+        processes, one per core. A closed or asynchronous Client is an
+        `urmx.errors.InputError`.
     progress : bool
         Show progress on stderr (a bar with rate and ETA on a terminal, plain lines in a
         log file), counted in the kind's unit, and say what was reused.
@@ -542,17 +675,18 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         Bad arguments or study file (`urmx.errors.InputError`,
         `urmx.catalog.CatalogError`), a study over the limits
         (`urmx.study.limits.SizeError`), an archive that cannot be written or holds another
-        study (`urmx.errors.OutputError`), another run on the same archive, another study's
-        parts, an unreachable scheduler or a cluster that lost a batch for good
-        (`urmx.errors.RunError`).
+        study (`urmx.errors.OutputError`, also for a full disk, saying what is kept),
+        another run on the same archive, another study's parts, an unreachable scheduler,
+        a cluster that lost a batch for good, a worker that runs other code, no worker left
+        for ``urmx.worker-timeout`` seconds or the scheduler gone (`urmx.errors.RunError`).
     """
     _check_batch_size(batch_size)
     check_scheduler(scheduler)
-    parts = None
-    if out is not None:
-        out, parts = _parts_folder(out)
     s = study if isinstance(study, Study) else load_study(study)
     check_size(s, kinds.get(s.kind), max_cells, max_gb)
+    parts = None
+    if out is not None:  # an input never becomes the output
+        out, parts = _parts_folder(out, input_files(s, records_dir))
     if parts is None:
         return _run(s, resolve_records(s, records_dir), None, scheduler, progress, command,
                     batch_size, kernel)
@@ -568,16 +702,21 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
                   *args: Any) -> None:
     """Run `study` into the archive `out` (its lock held): check whose archive and parts
     these are, resolve the records, run (``*args``: scheduler, progress, command,
-    batch_size, kernel of `_run`), write, remove the parts."""
+    batch_size, kernel of `_run`), write, remove the parts. A failure to write a part or
+    the archive (a full disk) says how many finished batches are kept and how to go on."""
     try:
         notes: list[str] = []
         earlier = _earlier_archive(out, study, force, notes)
         try:
             store = _claim_parts(parts, study, kinds.get(study.kind), force, notes)
             records = resolve_records(study, records_dir)
-            ds = _run(study, records, store, *args,
-                      archive=(earlier, str(out)) if earlier is not None else None,
-                      notes=tuple(notes))
+            try:
+                ds = _run(study, records, store, *args,
+                          archive=(earlier, str(out)) if earlier is not None else None,
+                          notes=tuple(notes))
+            except OutputError as exc:  # a full disk while saving parts
+                raise _kept(exc, parts, "and run the same command again to resume") \
+                    from None
         finally:
             if earlier is not None:
                 earlier.close()
@@ -585,7 +724,11 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
         if not any(parts.glob("*.npz")):  # nothing to resume from: leave nothing
             shutil.rmtree(parts, ignore_errors=True)
         raise
-    _write(ds, out)
+    try:
+        _write(ds, out)
+    except OutputError as exc:
+        raise _kept(exc, parts, "and run the same command again: the archive is written "
+                    "from them, nothing is computed again") from None
     shutil.rmtree(parts, ignore_errors=True)
 
 
@@ -604,3 +747,19 @@ def _write(ds: xr.Dataset, out: Path) -> None:
             write_netcdf(ds, out)
     finally:
         netCDF4.set_chunk_cache(*saved)
+
+
+def _kept(exc: OutputError, parts: Path, then: str) -> OutputError:
+    """`exc` with how many finished batches `parts` keeps and how to go on (free space
+    when the disk is full, else fix the cause)."""
+    import errno
+
+    from ..netcdf import disk_full
+
+    n = PartStore(parts, ()).count()
+    if not n:
+        return OutputError(f"{exc}; no finished batch is kept")
+    full = getattr(exc.__cause__, "errno", None) == errno.ENOSPC or disk_full(parts)
+    return OutputError(f"{exc}; {n} finished batch{'es' if n > 1 else ''} kept in "
+                       f"{str(parts)!r}: {'free space on its disk' if full else 'fix that'} "
+                       f"{then}")

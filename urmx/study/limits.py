@@ -2,8 +2,10 @@
 the limits above which a run stops before any work.
 
 The limits (:data:`MAX_CELLS`, :data:`MAX_GB`) are the defaults of ``urmx run --max-cells /
---max-gb`` and of `urmx.run_study`; the catalog imports :data:`MAX_CELLS` to refuse, at
-load, a range whose step makes more values than a study may have cells.
+--max-gb`` and of `urmx.run_study`. :data:`MAX_VALUES` bounds one dimension: a range
+``{start, stop, step}`` is counted from its three numbers before its values are made
+(`urmx.catalog.load_study`), so a step typed too small (1e-9 for 1e-2) is refused at once
+with the file, key and line, instead of filling the memory.
 
 Why these defaults: the engine keeps 8 bytes per cell of the grid in the main process for
 the whole run (where each finished cell's result lies, `urmx.study.cells`) and about 25
@@ -26,6 +28,8 @@ from ..errors import InputError
 MAX_CELLS = 20_000_000
 #: the largest archive (uncompressed estimate) a run writes unless raised (``--max-gb``) [GB]
 MAX_GB = 20.0
+#: most values one dimension of a study may hold (a ``{start, stop, step}`` range included)
+MAX_VALUES = 10**7
 
 
 class SizeError(InputError):

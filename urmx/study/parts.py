@@ -70,12 +70,19 @@ class PartStore:
         """Save one batch's arrays and its cells' keys as ``<key>.npz`` (written under a
         temporary name and renamed); its key is stored inside too, so a copied or renamed
         part is recognised."""
-        tmp = self.folder / f".{key}.{os.getpid()}.tmp.npz"
+        # the temporary name does not end in .npz, so no glob for parts ever counts a part
+        # still being written (a SIGINT then deletes it, and the count would go down)
+        tmp = self.folder / f".{key}.{os.getpid()}.npz.tmp"
         path = self.folder / f"{key}.npz"
-        with writing(self.folder, "part file in"):
-            np.savez(tmp, **result, batch_key=np.array(key),
-                     cell_key=np.asarray(cells, dtype=np.uint64))
-            os.replace(tmp, path)
+        try:
+            with writing(self.folder, "part file in"):
+                with open(tmp, "wb") as fh:
+                    np.savez(fh, **result, batch_key=np.array(key),
+                             cell_key=np.asarray(cells, dtype=np.uint64))
+                os.replace(tmp, path)
+        finally:  # a full disk leaves no temporary file behind
+            if tmp.exists():
+                tmp.unlink()
         return path
 
     def load(self, key: str) -> dict[str, np.ndarray] | None:

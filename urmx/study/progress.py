@@ -1,17 +1,28 @@
-"""Progress of a study run on stderr: a bar with rate and ETA on a terminal, plain lines in
-a log file."""
+"""Progress of a study run: a bar with rate and ETA on a terminal, plain lines in a log
+file (both on stderr), and `tqdm.auto`'s bar (a widget where ipywidgets is installed) in a
+Jupyter notebook."""
 
 from __future__ import annotations
 
 import sys
 import time as _time
+import warnings
 from typing import Any
 
 
+def in_notebook() -> bool:
+    """Whether this process is a Jupyter kernel (an IPython ZMQ shell)."""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None and hasattr(ipython,
+                                                                      "get_ipython") else None
+    return type(shell).__name__ == "ZMQInteractiveShell"
+
+
 class Progress:
-    """Progress of a study in its kind's unit (analyses, cells, ...), on stderr: a tqdm bar
-    (rate, ETA) on a terminal; on a file or pipe, plain lines (no carriage returns) at every
-    tenth of the work and at least once a minute."""
+    """Progress of a study in its kind's unit (analyses, cells, ...): in a Jupyter notebook
+    (and no `stream` given), `tqdm.auto`'s bar; else on stderr, a tqdm bar (rate, ETA) on a
+    terminal, and on a file or pipe, plain lines (no carriage returns) at every tenth of the
+    work and at least once a minute."""
 
     def __init__(self, total: int, done: int, enabled: bool, label: str = "urmx",
                  stream: Any = None, unit: str = "analyses"):
@@ -25,7 +36,13 @@ class Progress:
         if not self.enabled:
             return
         isatty = getattr(self.stream, "isatty", None)
-        if isatty is not None and isatty():
+        if stream is None and in_notebook():
+            with warnings.catch_warnings():  # no ipywidgets: tqdm's text bar, unwarned
+                warnings.simplefilter("ignore")
+                from tqdm.auto import tqdm as auto
+            self.bar = auto(total=total, initial=done, unit=self.unit, desc=label,
+                            smoothing=0.05, leave=True)
+        elif isatty is not None and isatty():
             from tqdm import tqdm
 
             self.bar = tqdm(total=total, initial=done, unit=self.unit, desc=label,

@@ -14,6 +14,10 @@ asks which one it is: it parses nothing, cuts nothing and assembles nothing itse
     The ``[study.<table>]`` table that makes a study this kind (None: the default kind, a
     study without any kind table). The catalog keeps every registered kind's table as data
     (``Study.tables``) and refuses any other ``[study.<name>]`` with file, key and line.
+``keys`` : tuple of str
+    The keys its ``[study.<table>]`` accepts (its ``parse`` refuses any other);
+    `urmx.catalog.file_keys` lists them with every other study-file key, and
+    ``docs/study-files.md`` must describe them (``tests/test_study_files.py``).
 ``combines`` : tuple of str
     Other kinds' tables this kind reads as well (a study with several kind tables is the
     kind that combines all the others; :func:`select`).
@@ -57,6 +61,10 @@ asks which one it is: it parses nothing, cuts nothing and assembles nothing itse
 ``reopen(ds) -> Dataset or None``
     For `urmx.open_study`: masks an archive of an older urmx of this kind (None when the
     archive is not this kind's or needs nothing); optional.
+``counts(ds) -> dict or None``
+    For `urmx.study.info` (``urmx info``): how many cells of an archive end in each way
+    (``{"ok": 40, "collapsed": 23, ...}``, the cells partitioned, missing ones included),
+    or None when `ds` is not this kind's archive; optional.
 
 Optional, with defaults:
 

@@ -245,6 +245,15 @@ def reopen(ds: xr.Dataset) -> xr.Dataset | None:
     return ds
 
 
+def counts(ds: xr.Dataset) -> dict[str, int] | None:
+    """The grid's cells by status (``ok``, ``collapsed``, ``event-limit``, ``not-run``);
+    None when `ds` has no ``status``."""
+    if "status" not in ds.data_vars:
+        return None
+    status = np.asarray(ds["status"].values)
+    return {name: int((status == code).sum()) for code, name in enumerate(STATUS)}
+
+
 def cell_bytes(study: Any) -> float:
     """Bytes of one cell's outputs in the archive: float64, int32 for the integer outputs,
     int8 for the status. [B]"""
@@ -253,4 +262,4 @@ def cell_bytes(study: Any) -> float:
 
 KIND = Kind(name="grid", unit="analyses", outputs=BATCH_OUTPUTS, task=task, run=run_batch,
             assemble=assemble, reopen=reopen, extras=extras,
-            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes)
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes, counts=counts)

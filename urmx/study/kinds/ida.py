@@ -2,14 +2,22 @@
 record, cor) cell by incremental dynamic analysis (`urmx.fragility`), the IDA curves, and
 the lognormal fragility fit of each (wall, diaphragm, cor) over the records.
 
-The table holds ``im`` (the intensity measure), ``rtol``, ``step`` and ``max_intensity``
-(`IdaSettings`; defaults those of `urmx.fragility.collapse_capacity`). A batch is any block
-of cells of one record (`urmx.study.batches`; :func:`run_batch`, numpy only); the record's
-intensity for each wall and its predominant frequency travel with every cell (computed once
-per batch, and the frequency once per record on each worker). A cell the study's pairs
-leave out is missing in every output: NaN, with ``censored``,
+The table holds ``im`` (the intensity measure), ``rtol``, ``step``, ``max_intensity`` and
+``sa_avg_range`` (`IdaSettings`; defaults those of `urmx.fragility.collapse_capacity`). A
+batch is any block of cells of one record (`urmx.study.batches`; :func:`run_batch`, numpy
+only); the record's intensity for each wall and its predominant frequency travel with every
+cell (computed once per batch, and the frequency once per record on each worker). A cell
+the study's pairs leave out is missing in every output: NaN, with ``censored``,
 ``analyses`` and ``event_limits`` float64 in the Dataset and int32 with the ``_FillValue``
 on disk.
+
+The capacities are scale factors times the record's intensity, so one run holds the
+capacities in every measure: the archive keeps the scale factor at collapse
+(``collapse_scale``) and each record's intensity at scale 1 in every measure
+(``record_pga``, ``record_pgv``, ``record_sa_wall``, ``record_sa_diaphragm``,
+``record_sa_avg``, computed from the records when the Dataset is assembled), and the
+bootstrap intervals of the fits (``median_collapse_intensity_lower`` / ``_upper``,
+``dispersion_lower`` / ``_upper``; `urmx.fragility.fit_lognormal`).
 """
 
 from __future__ import annotations
@@ -60,15 +68,28 @@ class IdaSettings:
         Ratio of the hunt's geometric grid of scale factors. [1]
     max_intensity : float
         Highest intensity analysed (censoring). [units of the measure]
+    sa_avg_range : (float, float) or None
+        Periods of ``sa_avg`` for every wall; None: each wall's default range
+        (`urmx.fragility.sa_avg_range`). [s]
     """
 
     im: str = fragility.DEFAULT_IM
     rtol: float = fragility.RTOL
     step: float = fragility.STEP
     max_intensity: float = math.nan
+    sa_avg_range: tuple[float, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """The settings (``sa_avg_range`` only when given: batch keys of studies without it
+        stay those of before it existed)."""
+        out = dataclasses.asdict(self)
+        if out["sa_avg_range"] is None:
+            del out["sa_avg_range"]
+        return out
+
+
+#: the keys of ``[study.ida]`` (the fields of `IdaSettings`)
+KEYS = ("im", "rtol", "step", "max_intensity", "sa_avg_range")
 
 
 def parse(study: Any) -> IdaSettings:
@@ -77,10 +98,9 @@ def parse(study: Any) -> IdaSettings:
     if not isinstance(table, dict):
         raise study.error("study.ida", "must be a table (im, rtol, step, max_intensity)",
                           "ida")
-    known = ("im", "rtol", "step", "max_intensity")
     for k in table:
-        if k not in known:
-            raise study.error(f"study.ida.{k}", f"unknown key (known: {', '.join(known)})",
+        if k not in KEYS:
+            raise study.error(f"study.ida.{k}", f"unknown key (known: {', '.join(KEYS)})",
                               "ida", k)
     im = table.get("im", IdaSettings.im)
     if im not in fragility.IMS:
@@ -98,6 +118,13 @@ def parse(study: Any) -> IdaSettings:
     if values["rtol"] >= 1.0:
         raise study.error("study.ida.rtol", f"{values['rtol']!r} must be below 1", "ida",
                           "rtol")
+    if "sa_avg_range" in table:
+        try:
+            values["sa_avg_range"] = fragility.intensity.check_period_range(
+                table["sa_avg_range"], "sa_avg_range")
+        except ValueError as exc:
+            raise study.error("study.ida.sa_avg_range", str(exc), "ida",
+                              "sa_avg_range") from None
     for k in ("scale", "impact", "damping"):
         if k in study.extra:
             raise study.error(f"study.{k}", "an IDA study scales each record itself and runs "
@@ -105,7 +132,31 @@ def parse(study: Any) -> IdaSettings:
                               "a dimension here", k)
     if study.histories:
         raise study.error("study.history", "an IDA study keeps no time histories", "history")
-    return IdaSettings(im=im, **values)
+    settings = IdaSettings(im=im, **values)
+    _check_learnable(study, settings)
+    return settings
+
+
+def _check_learnable(study: Any, settings: IdaSettings) -> None:
+    """Refuse a ``max_intensity`` below the search's first analysis in every cell: each
+    cell would be analysed once, at max_intensity, and (surviving it, as the search expects
+    below half a wall's static acceleration) censored there, so the study could learn no
+    capacity. Checked for ``im = "pga"``, whose start depends on the wall alone
+    (`urmx.fragility.START_FRACTION` of its `static_acceleration`); the other measures'
+    starts depend on the records, which are read after loading."""
+    if settings.im != "pga":
+        return
+    starts = [(fragility.START_FRACTION * fragility.static_acceleration(study.wall(w, d)),
+               w.id, d.id) for w in study.walls for d in study.diaphragms]
+    least = min(starts)
+    if settings.max_intensity < least[0]:
+        raise study.error(
+            "study.ida.max_intensity", f"{settings.max_intensity:g} m s-2 lies below where "
+            f"the collapse search starts in every cell ({fragility.START_FRACTION:g} x the "
+            f"wall's static acceleration; the least: {least[0]:.3g} m s-2, wall "
+            f"{least[1]!r} on {least[2]!r}): every cell would be analysed once, at "
+            "max_intensity, and censored there, so nothing could be learnt; raise it "
+            f"(default {fragility.MAX_INTENSITY['pga']:g} m s-2, 5 g)", "ida", "max_intensity")
 
 
 def dims(study: Any) -> dict[str, list]:
@@ -149,7 +200,8 @@ def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
     ida, dt = task["ida"], task["dt"]
     walls = [w for row in task["walls"] for w in row]
     shape = (len(task["walls"]), len(task["walls"][0]), 1, len(task["cor"]))
-    unit = fragility.record_intensities(acc, dt, ida["im"], walls).reshape(shape[:2])
+    unit = fragility.record_intensities(acc, dt, ida["im"], walls,
+                                        ida.get("sa_avg_range")).reshape(shape[:2])
     results = {}
     for iw, idp, _, ic in np.ndindex(*shape):
         results[iw, idp, ic] = fragility.cell_capacity(
@@ -188,28 +240,59 @@ def _cells(cells: dict) -> dict[str, np.ndarray]:
     return out
 
 
-def _fits(cap: np.ndarray, cen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Median and dispersion of the lognormal fit over the records of each (wall,
-    diaphragm, cor); NaN where no fit exists."""
-    median = np.full((cap.shape[0], cap.shape[1], cap.shape[3]), np.nan)
-    disp = np.full_like(median, np.nan)
-    for iw, idp, ic in np.ndindex(median.shape):
+def _record_measures(study: Any, records: dict) -> dict[str, np.ndarray]:
+    """Each record's intensity at scale 1 in every measure (`urmx.fragility.RECORD_IMS`):
+    ``record_pga`` and ``record_pgv`` per record, the spectral ones per (wall, diaphragm,
+    record); and the ``sa_avg`` period range per (wall, diaphragm). One pass of the
+    response spectrum per record over every cell's periods."""
+    walls = [study.wall(w, d) for w in study.walls for d in study.diaphragms]
+    shape = (len(study.walls), len(study.diaphragms))
+    rng = study.settings.sa_avg_range
+    out = {f"record_{im}": np.full((*shape, len(study.records)), np.nan)
+           for im in fragility.RECORD_IMS}
+    for ir, rid in enumerate(study.records):
+        rec = records[rid]
+        m = fragility.record_measures(rec.scaled(), rec.dt, walls, rng)
+        for im, v in m.items():
+            out[f"record_{im}"][..., ir] = v.reshape(shape)
+    for im in ("pga", "pgv"):  # a property of the record alone
+        out[f"record_{im}"] = out[f"record_{im}"][0, 0]
+    ranges = np.array([rng or fragility.sa_avg_range(w) for w in walls]).reshape(*shape, 2)
+    out["sa_avg_period_low"], out["sa_avg_period_high"] = ranges[..., 0], ranges[..., 1]
+    return out
+
+
+FIT_OUTPUTS = ("median_collapse_intensity", "dispersion", "median_collapse_intensity_lower",
+               "median_collapse_intensity_upper", "dispersion_lower", "dispersion_upper")
+
+
+def _fits(cap: np.ndarray, cen: np.ndarray) -> dict[str, np.ndarray]:
+    """The lognormal fit over the records of each (wall, diaphragm, cor) and the bootstrap
+    intervals of its median and dispersion (`FIT_OUTPUTS`); NaN where no fit exists."""
+    shape = (cap.shape[0], cap.shape[1], cap.shape[3])
+    out = {name: np.full(shape, np.nan) for name in FIT_OUTPUTS}
+    for iw, idp, ic in np.ndindex(shape):
         ran = np.isfinite(cap[iw, idp, :, ic])
         try:
-            f = fragility.fit_lognormal(cap[iw, idp, ran, ic], cen[iw, idp, ran, ic] == 1)
+            f = fragility.fit_lognormal(cap[iw, idp, ran, ic], cen[iw, idp, ran, ic])
         except ValueError:
             continue
-        median[iw, idp, ic], disp[iw, idp, ic] = f.median, f.dispersion
-    return median, disp
+        for name, v in zip(FIT_OUTPUTS, (f.median, f.dispersion, *f.median_ci,
+                                         *f.dispersion_ci), strict=True):
+            out[name][iw, idp, ic] = v
+    return out
 
 
-def _data_vars(cells: dict, median, disp, attrs: Callable) -> dict[str, xr.Variable]:
+def _data_vars(cells: dict, fits: dict, measures: dict,
+               attrs: Callable) -> dict[str, xr.Variable]:
     import xarray as xr
 
     curve = (*DIMS, "intensity_step")
     fit_dims = ("wall", "diaphragm", "cor")
     stored = f"{MISSING}; stored as int32 with _FillValue {INT_FILL}, read as float64"
-    return {
+    ci = (f"percentile bootstrap over the records at {fragility.CONFIDENCE:g}, "
+          f"{fragility.RESAMPLES} resamples (urmx.fragility.fit_lognormal)")
+    out = {
         "collapse_intensity": xr.Variable(DIMS, cells["collapse_intensity"], attrs=attrs(
             "collapse_intensity", comment=MISSING)),
         "censored": xr.Variable(DIMS, cells["censored"], attrs=attrs(
@@ -218,16 +301,24 @@ def _data_vars(cells: dict, median, disp, attrs: Callable) -> dict[str, xr.Varia
             "instability_ratio", comment="IDA curve: one value per analysis of the cell, "
             "ascending intensity; NaN after the cell's last analysis and where the cell "
             "was not run")),
-        "median_collapse_intensity": xr.Variable(fit_dims, median,
-                                                 attrs=attrs("median_collapse_intensity")),
-        "dispersion": xr.Variable(fit_dims, disp, attrs=attrs("dispersion")),
+        **{name: xr.Variable(fit_dims, fits[name], attrs=attrs(name, **(
+            {"comment": ci} if name.endswith(("_lower", "_upper")) else {})))
+           for name in FIT_OUTPUTS},
         "analyses": xr.Variable(DIMS, cells["analyses"], attrs=attrs("analyses",
                                                                      comment=stored)),
         "event_limits": xr.Variable(DIMS, cells["event_limits"], attrs=attrs(
             "event_limits", comment=stored)),
         "record_intensity": xr.Variable(DIMS[:3], cells["record_intensity"],
                                         attrs=attrs("record_intensity")),
+        "collapse_scale": xr.Variable(DIMS, cells["collapse_intensity"]
+                                      / cells["record_intensity"][..., None],
+                                      attrs=attrs("collapse_scale", comment=MISSING)),
     }
+    for im in fragility.RECORD_IMS:
+        v = measures[f"record_{im}"]
+        out[f"record_{im}"] = xr.Variable(DIMS[2:3] if v.ndim == 1 else DIMS[:3], v,
+                                          attrs=attrs(f"record_{im}"))
+    return out
 
 
 def _coords(study: Any, records: dict, cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
@@ -245,6 +336,8 @@ def _coords(study: Any, records: dict, cells: dict, attrs: Callable) -> dict[str
                                       attrs=attrs("intensity"))
     coords["rocking_period"] = xr.Variable(("wall", "diaphragm"), periods,
                                            attrs=attrs("rocking_period"))
+    for name in ("sa_avg_period_low", "sa_avg_period_high"):
+        coords[name] = xr.Variable(("wall", "diaphragm"), cells[name], attrs=attrs(name))
     coords["predominant_frequency"] = xr.Variable(
         "record", cells["predominant_frequency"], attrs=attrs(
             "predominant_frequency", comment="of each record, Konno-Ohmachi smoothed "
@@ -265,13 +358,21 @@ def assemble(study: Any, records: dict, cells: dict, extras: dict,
         return {**variables.attrs(name, None, **ctx), **extra}
 
     cells = _cells(cells)
-    median, disp = _fits(cells["collapse_intensity"], cells["censored"])
+    measures = _record_measures(study, records)
+    cells.update({k: measures.pop(k) for k in ("sa_avg_period_low", "sa_avg_period_high")})
+    fits = _fits(cells["collapse_intensity"], cells["censored"])
     gattrs = dict(attrs)
     gattrs.update({"intensity_measure": settings.im, "ida_rtol": settings.rtol,
                    "ida_step": settings.step, "ida_max_intensity": settings.max_intensity,
                    "ida_convention": "first collapse: the lowest collapse the hunt and "
-                                     "bisection saw; censored cells hold max_intensity"})
-    return xr.Dataset(_data_vars(cells, median, disp, var_attrs),
+                                     "bisection saw; censored cells hold max_intensity",
+                   "sa_avg_periods": fragility.SA_AVG_PERIODS,
+                   "sa_avg_range": "per wall: urmx.fragility.sa_avg_range" if
+                   settings.sa_avg_range is None else list(settings.sa_avg_range),
+                   "confidence_level": fragility.CONFIDENCE,
+                   "bootstrap_resamples": fragility.RESAMPLES,
+                   "bootstrap_seed": fragility.fits.SEED})
+    return xr.Dataset(_data_vars(cells, fits, measures, var_attrs),
                       coords=_coords(study, records, cells, var_attrs), attrs=gattrs)
 
 
@@ -295,6 +396,16 @@ def cell_bytes(study: Any) -> float:
     return 8 + 3 * 4 + 2 * 8 * CURVE_POINTS
 
 
+def counts(ds: xr.Dataset) -> dict[str, int] | None:
+    """The cells of an IDA archive: ``collapsed`` (a capacity), ``censored`` (survived
+    max_intensity) and ``missing`` (not run); None when `ds` is not an IDA archive."""
+    if "collapse_intensity" not in ds.data_vars or "censored" not in ds.data_vars:
+        return None
+    censored = np.asarray(ds["censored"].values, dtype=np.float64)
+    return {"collapsed": int((censored == 0).sum()), "censored": int((censored == 1).sum()),
+            "missing": int(np.isnan(censored).sum())}
+
+
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
             task=task, run=run_batch, assemble=assemble, reopen=reopen, archived=ARCHIVED,
-            cell_bytes=cell_bytes)
+            cell_bytes=cell_bytes, counts=counts, keys=KEYS)

@@ -28,6 +28,8 @@ class Kind:
     fills: dict[str, tuple[Any, Any]] = field(default_factory=dict)
     archived: dict[str, str] = field(default_factory=dict)
     cell_bytes: Callable[[Any], float] | None = None
+    counts: Callable[[Any], dict[str, int] | None] | None = None
+    keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""

@@ -1,0 +1,176 @@
+"""urmx installed from a built wheel, outside the checkout: the wheel carries the catalog and
+the record manifest (setup.py copies them into ``urmx/_data/``), and ``urmx records list``,
+``urmx simulate`` of a catalog wall under a manifest record and ``urmx run`` of a catalog
+study give the checkout's numbers; outputs go to the current folder, never into the
+package."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+import urmx
+from urmx.cli import main
+from urmx.config import checkout, data_dir
+
+ROOT = Path(__file__).resolve().parent.parent
+#: what a wheel is built from (the rest of the checkout is not needed)
+SOURCES = ("pyproject.toml", "setup.py", "MANIFEST.in", "README.md", "urmx", "catalog",
+           "records")
+
+
+def _copy_sources(dest: Path) -> Path:
+    """The files a wheel is built from, copied out (so the build leaves no build/ or
+    egg-info in the checkout)."""
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "_data")
+    dest.mkdir(parents=True)
+    for name in SOURCES:
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name, ignore=ignore)
+        else:
+            shutil.copy2(src, dest / name)
+    return dest
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    """A wheel built from the checkout's sources (``pip wheel . --no-deps``)."""
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = _copy_sources(tmp / "src")
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", ".", "--no-deps", "-q",
+                           "-w", str(tmp / "dist")], cwd=src, capture_output=True, text=True,
+                          timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    (found,) = (tmp / "dist").glob("urmx-*.whl")
+    return found
+
+
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory) -> Path:
+    """The wheel installed with ``pip install --no-deps --target DIR`` (its dependencies are
+    this environment's); the compiled kernel of the checkout, when there is one, is copied
+    into it (the cache folder is named by the hash of the same sources and versions), so
+    that the test does not compile the kernel a second time."""
+    target = tmp_path_factory.mktemp("site") / "lib"
+    proc = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q",
+                           "--no-index", "--target", str(target), str(wheel)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    from urmx.jitcache import SOURCE_HASH
+
+    cache = ROOT / "urmx" / "__pycache__" / f"numba-{SOURCE_HASH}"
+    if cache.is_dir():
+        shutil.copytree(cache, target / "urmx" / "__pycache__" / cache.name)
+    return target
+
+
+def _urmx(target: Path, cwd: Path, *args: str, records: Path) -> subprocess.CompletedProcess:
+    """``urmx ARGS`` of the installed wheel (its console script), run in `cwd` with only
+    the install on PYTHONPATH."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR")}
+    env.update(PYTHONPATH=str(target), URMX_RECORDS=str(records), MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, str(target / "bin" / "urmx"), *args], cwd=cwd,
+                          env=env, capture_output=True, text=True, timeout=900)
+
+
+def test_the_wheel_carries_the_catalog_and_the_manifest(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    catalog = {f"urmx/_data/{p.relative_to(ROOT).as_posix()}"
+               for p in (ROOT / "catalog").rglob("*") if p.is_file()
+               and "__pycache__" not in p.parts}
+    assert "urmx/_data/catalog/studies/verification.toml" in catalog
+    assert catalog <= names
+    assert "urmx/_data/records/manifest.toml" in names
+    assert "urmx/variables.toml" in names
+    assert not any(n.startswith(("catalog/", "records/", "tests/", "benchmarks/"))
+                   for n in names)
+
+
+def test_the_checkout_reads_its_own_folders():
+    """From the checkout (an editable install) urmx reads the top-level folders, not a
+    copy: the one source."""
+    assert checkout() == ROOT
+    assert data_dir("catalog") == ROOT / "catalog"
+    assert data_dir("records") == ROOT / "records"
+    assert not (ROOT / "urmx" / "_data").exists()
+
+
+@pytest.mark.slow
+def test_installed_wheel_runs_outside_the_checkout(installed, tmp_path, records_dir, capsys):
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    shutil.copy(ROOT / "catalog" / "examples" / "benchmark-wall.toml", work)
+    probe = subprocess.run(
+        [sys.executable, "-c", "import urmx, urmx.config as c; print(urmx.__file__); "
+         "print(c.data_dir('catalog')); print(c.checkout())"],
+        cwd=work, env={**os.environ, "PYTHONPATH": str(installed)}, capture_output=True,
+        text=True, check=True)
+    where, catalog, root = probe.stdout.split("\n")[:3]
+    assert Path(where).is_relative_to(installed)  # not the checkout's editable urmx
+    assert Path(catalog) == installed / "urmx" / "_data" / "catalog" and root == "None"
+
+    listed = _urmx(installed, work, "records", "list", records=records_dir)
+    assert listed.returncode == 0, listed.stderr
+    assert main(["records", "list", "--records", str(records_dir)]) == 0
+    assert listed.stdout == capsys.readouterr().out
+    assert "elcentro" in listed.stdout and "p695-01-mul009" in listed.stdout
+
+    sim = _urmx(installed, work, "simulate", "benchmark-wall.toml", "elcentro", "--scale",
+                "0.5", "--out", "run.nc", records=records_dir)
+    assert sim.returncode == 0, sim.stderr
+    assert main(["simulate", str(ROOT / "catalog/examples/benchmark-wall.toml"), "elcentro",
+                 "--scale", "0.5", "--records", str(records_dir),
+                 "--out", str(tmp_path / "run.nc")]) == 0
+    with xr.open_dataset(work / "run.nc") as a, xr.open_dataset(tmp_path / "run.nc") as b:
+        # the same numbers, bit for bit, and attributes, but for the provenance of the code
+        # that ran: a wheel is no git checkout
+        assert a.attrs["urmx_git_commit"] == "none"
+        assert a.attrs["urmx_version"] == urmx.__version__
+        assert b.attrs["urmx_git_commit"] != "none"
+        assert a.attrs["kernel_source_hash"] == b.attrs["kernel_source_hash"]
+        for ds in (a, b):
+            for key in ("urmx_version", "urmx_git_commit", "urmx_git_dirty"):
+                del ds.attrs[key]
+        xr.testing.assert_identical(a, b)
+        assert a.sizes["time"] > 1000
+
+    study = _urmx(installed, work, "run", "verification", "--out", "verification.nc",
+                  "--scheduler", "serial", "--quiet", records=records_dir)
+    assert study.returncode == 0, study.stderr
+    assert main(["run", "verification", "--out", str(tmp_path / "verification.nc"),
+                 "--scheduler", "serial", "--quiet", "--records", str(records_dir)]) == 0
+    with xr.open_dataset(work / "verification.nc") as a, \
+            xr.open_dataset(tmp_path / "verification.nc") as b:
+        xr.testing.assert_equal(a, b)  # attributes differ: the command line, the time
+        assert int((a.status <= 1).sum()) == 63  # 3 walls, each under its record, 21 CORs
+
+    # an output the command is not told where to put goes to the current folder
+    cal = _urmx(installed, work, "calibrate", records=records_dir)
+    assert cal.returncode == 0, cal.stderr
+    assert (work / "reports" / "calibration.md").is_file()
+    assert not list(installed.glob("reports")) and not list(installed.glob("results"))
+    bench = _urmx(installed, work, "bench", "kernel", records=records_dir)
+    assert bench.returncode == 2 and len(bench.stderr.strip().splitlines()) == 1
+    assert "source checkout" in bench.stderr
+
+
+def test_what_needs_a_checkout_says_so_in_one_line(tmp_path, monkeypatch, capsys):
+    """An installed urmx (no checkout above the package) refuses to store a guard baseline
+    without --baseline, before measuring anything, and reads its data from the package."""
+    import urmx.config
+
+    monkeypatch.setattr(urmx.config, "project_root", lambda: tmp_path)
+    assert urmx.config.checkout() is None
+    assert urmx.config.data_dir("catalog").parts[-3:] == ("urmx", "_data", "catalog")
+    assert main(["bench", "guard", "--update"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert "guard --update needs a source checkout of urmx" in err

@@ -1,0 +1,330 @@
+"""Collapse risk of a wall at a site: a lognormal collapse fragility integrated over a hazard
+curve (:func:`collapse_rate`), and the margin of a median capacity over a design spectrum
+(:func:`design_sa`), numpy only.
+
+The mean annual frequency of collapse is ``lambda_c = integral P(C | x) |d lambda(x)|``
+(Cornell, Jalayer, Hamburger & Foutch 2002, J. Struct. Eng. 128(4)), computed as the
+expectation of the hazard over the capacity, ``integral f_C(x) lambda(x) dx``, on 4001
+points spanning the fragility's median times ``exp(+-8 beta)``. The hazard curve is
+interpolated linearly in ``(ln x, ln lambda)``; beyond its ends it is extended along its end
+segments (a power law), and the share of ``lambda_c`` that comes from there is reported
+(``CollapseRisk.tail_share``): where it is large, the curve does not reach the intensities
+that collapse the wall. The probability of collapse in ``years`` is
+``1 - exp(-lambda_c years)`` (Poisson occurrences).
+
+Files. A hazard curve is a CSV file of two columns, intensity and mean annual frequency
+of exceedance, whose header names the measure and the units of each column::
+
+    # any comment lines (the source of the numbers)
+    pga [g],annual_rate [1/yr]
+    0.1,0.0213
+    ...
+
+The measure is one of `urmx.fragility.RECORD_IMS` (``pga``, ``pgv``, ``sa_wall``,
+``sa_diaphragm``, ``sa_avg``) in its units (`urmx.fragility.IM_ATTRS`: m s-2, m s-1) or,
+for an acceleration, in ``g`` (standard gravity, 9.80665 m s-2); it must be the fit's
+measure. A design spectrum is a CSV file ``period [s],sa [g]`` (or ``sa [m s-2]``) of the
+5 %-damped spectral acceleration against period, interpolated linearly in period.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, MissingFileError
+from ..records.readers import STANDARD_GRAVITY
+from .intensity import IM_ATTRS, RECORD_IMS
+
+YEARS = 50.0  # default exposure time of `collapse_rate` [yr]
+SPAN = 8.0  # the integral covers the median times exp(+-SPAN dispersion)
+POINTS = 4001  # points of the integral
+RATE_UNITS = ("1/yr", "yr-1", "1/year", "a-1")
+_HEADER = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*\[\s*([^\]]*?)\s*\]\s*$")
+
+
+@dataclass(frozen=True)
+class HazardCurve:
+    """Intensity against mean annual frequency of exceedance.
+
+    Attributes
+    ----------
+    intensity : ndarray
+        Increasing, positive. [units]
+    rate : ndarray
+        Decreasing, positive. [1/yr]
+    im, units : str or None
+        The measure and its units (None for a pair of arrays).
+    source : str
+        The file, or ``"arrays"``.
+    """
+
+    intensity: np.ndarray
+    rate: np.ndarray
+    im: str | None = None
+    units: str | None = None
+    source: str = "arrays"
+
+
+@dataclass(frozen=True)
+class CollapseRisk:
+    """Result of :func:`collapse_rate`.
+
+    Attributes
+    ----------
+    rate : float
+        Mean annual frequency of collapse. [1/yr]
+    probability : float
+        Probability of at least one collapse in `years`. [1]
+    years : float
+        Exposure time. [yr]
+    tail_share : float
+        Share of `rate` from intensities beyond the hazard curve's (its end segments
+        extended). [1]
+    im, units : str or None
+        The measure and units of the hazard curve and the fit.
+    """
+
+    rate: float
+    probability: float
+    years: float
+    tail_share: float
+    im: str | None = None
+    units: str | None = None
+
+
+def _read_rows(path: Path, what: str) -> tuple[list[tuple[str, str]], list[tuple[int, list]]]:
+    """The (name, units) of each column of a two-column CSV file's header and its numeric
+    rows (line number, values); errors name the file and line."""
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        raise MissingFileError(f"{what} {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what} {str(path)!r} cannot be read: {exc}") from None
+    header, rows = None, []
+    for k, raw in enumerate(lines, start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        cells = [c.strip() for c in line.split(",")]
+        if len(cells) != 2:
+            raise InputError(f"{path}:{k}: {what} rows have two columns; got {line!r}")
+        if header is None:
+            found = [_HEADER.match(c) for c in cells]
+            if not all(found):
+                raise InputError(f"{path}:{k}: the header must name each column and its units, "
+                                 f"like 'pga [g],annual_rate [1/yr]'; got {line!r}")
+            header = [(m.group(1), m.group(2)) for m in found]
+            continue
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            raise InputError(f"{path}:{k}: {line!r} is not two numbers") from None
+        rows.append((k, values))
+    if header is None or len(rows) < 2:
+        raise InputError(f"{what} {str(path)!r} needs a header and at least two rows")
+    return header, rows
+
+
+def _to_si(im: str, units: str, where: str) -> float:
+    """Factor from `units` to the SI units of measure `im` (g for accelerations)."""
+    si = IM_ATTRS[im][0]
+    if units == si:
+        return 1.0
+    if units == "g" and si == "m s-2":
+        return STANDARD_GRAVITY
+    raise InputError(f"{where}: units {units!r} of {im!r}: use {si!r}"
+                     + (" or 'g'" if si == "m s-2" else ""))
+
+
+def _monotone(x: np.ndarray, rows: list, what: str, rising: bool, where: str) -> None:
+    step = np.diff(x) if rising else -np.diff(x)
+    if np.any(~np.isfinite(x)) or np.any(x <= 0):
+        k = int(np.argmax(~np.isfinite(x) | (x <= 0)))
+        raise InputError(f"{where}:{rows[k][0]}: {what} {float(x[k])!r} must be positive and "
+                         "finite")
+    if np.any(step <= 0):
+        k = int(np.argmax(step <= 0)) + 1
+        raise InputError(f"{where}:{rows[k][0]}: {what} must {'rise' if rising else 'fall'} "
+                         f"from row to row; got {float(x[k - 1])!r} then {float(x[k])!r}")
+
+
+def read_hazard(path: str | os.PathLike) -> HazardCurve:
+    """A hazard curve from a CSV file (module docstring), in the measure's SI units.
+
+    Raises
+    ------
+    urmx.errors.InputError
+        A header without measure or units, an unknown measure or units, a row that is not
+        two numbers, intensities that do not rise or rates that do not fall.
+    """
+    path = Path(path)
+    header, rows = _read_rows(path, "hazard curve")
+    (im, units), (rname, runits) = header
+    if im not in RECORD_IMS:
+        raise InputError(f"{path}: the first column must be an intensity measure "
+                         f"({', '.join(RECORD_IMS)}); got {im!r}")
+    if runits not in RATE_UNITS:
+        raise InputError(f"{path}: the second column ({rname}) must be a mean annual "
+                         f"frequency of exceedance in '1/yr'; got units {runits!r}")
+    data = np.array([v for _, v in rows])
+    intensity = data[:, 0] * _to_si(im, units, str(path))
+    _monotone(intensity, rows, "intensity", True, str(path))
+    _monotone(data[:, 1], rows, "annual rate", False, str(path))
+    return HazardCurve(intensity, data[:, 1], im, IM_ATTRS[im][0], str(path))
+
+
+def _curve(hazard, fit) -> HazardCurve:
+    """The hazard curve of a path or a pair, checked against the fit's measure."""
+    if isinstance(hazard, HazardCurve):
+        curve = hazard
+    elif isinstance(hazard, (str, os.PathLike)):
+        curve = read_hazard(hazard)
+    elif isinstance(hazard, (tuple, list)) and len(hazard) == 2:
+        x, lam = (np.asarray(v, dtype=float).ravel() for v in hazard)
+        if x.size != lam.size or x.size < 2:
+            raise InputError(f"hazard: intensity and annual_rate need the same length >= 2 "
+                             f"(got {x.size} and {lam.size})")
+        rows = [(k, None) for k in range(x.size)]
+        _monotone(x, rows, "intensity", True, "hazard (entry)")
+        _monotone(lam, rows, "annual rate", False, "hazard (entry)")
+        curve = HazardCurve(x, lam, getattr(fit, "im", None), getattr(fit, "units", None))
+    else:
+        raise InputError(f"hazard must be a CSV file or a pair (intensity, annual_rate) of "
+                         f"arrays, not {type(hazard).__name__}")
+    fim, funits = getattr(fit, "im", None), getattr(fit, "units", None)
+    if curve.im is not None and fim is not None and (curve.im, curve.units) != (fim, funits):
+        raise InputError(f"{curve.source}: the hazard curve is in {curve.im} [{curve.units}], "
+                         f"the fragility in {fim} [{funits}]: they must be the same measure")
+    return curve
+
+
+def collapse_rate(fit, hazard, years: float = YEARS) -> CollapseRisk:
+    """Mean annual frequency and probability of collapse of a lognormal fragility over a
+    hazard curve (module docstring).
+
+    Parameters
+    ----------
+    fit : LognormalFit
+        The fragility (anything with ``median`` and ``dispersion``; its ``im`` and ``units``,
+        when set, must be the hazard curve's). [units of the intensity]
+    hazard : str, path or (array_like, array_like)
+        A hazard curve CSV file (module docstring), or ``(intensity, annual_rate)`` in the
+        fit's units and [1/yr].
+    years : float
+        Exposure time of the probability. [yr]
+
+    Returns
+    -------
+    CollapseRisk
+        ``rate`` [1/yr], ``probability`` [1] in `years`, ``tail_share`` [1].
+    """
+    try:
+        years = float(years)
+    except (TypeError, ValueError):
+        raise InputError(f"years={years!r} must be a number of years") from None
+    if not (math.isfinite(years) and years > 0):
+        raise InputError(f"years={years!r} must be a positive number of years")
+    median, beta = float(fit.median), float(fit.dispersion)
+    if not (math.isfinite(median) and median > 0 and math.isfinite(beta) and beta > 0):
+        raise InputError(f"the fragility needs a positive median and dispersion; got "
+                         f"{median!r}, {beta!r}")
+    curve = _curve(hazard, fit)
+    rate, tail = rates(curve, np.array([median]), np.array([beta]))
+    return CollapseRisk(float(rate[0]), float(-np.expm1(-rate[0] * years)), years,
+                        float(tail[0]), curve.im, curve.units)
+
+
+def rates(curve: HazardCurve, median, dispersion,
+          points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """Mean annual frequencies of collapse [1/yr] and their tail shares [1] of many
+    lognormal fragilities (`median` [units of the curve] and `dispersion` [1], arrays of one
+    shape) over one hazard curve, vectorised (module docstring)."""
+    m = np.asarray(median, dtype=float)[..., None]
+    b = np.asarray(dispersion, dtype=float)[..., None]
+    lx, ll = np.log(curve.intensity), np.log(curve.rate)
+    z = np.linspace(-SPAN, SPAN, int(points))
+    u = np.log(m) + z * b
+    log_rate = np.interp(u, lx, ll)
+    lo, hi = u < lx[0], u > lx[-1]
+    log_rate = np.where(lo, ll[0] + (u - lx[0]) * (ll[1] - ll[0]) / (lx[1] - lx[0]), log_rate)
+    log_rate = np.where(hi, ll[-1] + (u - lx[-1]) * (ll[-1] - ll[-2]) / (lx[-1] - lx[-2]),
+                        log_rate)
+    f = np.exp(-0.5 * z * z + log_rate) / math.sqrt(2 * math.pi)  # density in z
+    dz = z[1] - z[0]
+    total = (np.sum(f, -1) - 0.5 * (f[..., 0] + f[..., -1])) * dz
+    out = np.where(lo | hi, f, 0.0)
+    tail = (np.sum(out, -1) - 0.5 * (out[..., 0] + out[..., -1])) * dz
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return total, np.where(total > 0, tail / total, 0.0)
+
+
+@dataclass(frozen=True)
+class DesignSpectrum:
+    """5 %-damped spectral acceleration against period.
+
+    Attributes
+    ----------
+    period : ndarray
+        Increasing, >= 0. [s]
+    sa : ndarray
+        [m s-2]
+    source : str
+    """
+
+    period: np.ndarray
+    sa: np.ndarray
+    source: str = "arrays"
+
+
+def read_spectrum(path: str | os.PathLike) -> DesignSpectrum:
+    """A design spectrum from a CSV file ``period [s],sa [g]`` (or ``sa [m s-2]``).
+
+    Raises
+    ------
+    urmx.errors.InputError
+        A bad header, a row that is not two numbers, periods that do not rise, a Sa that is
+        not positive.
+    """
+    path = Path(path)
+    header, rows = _read_rows(path, "design spectrum")
+    (pname, punits), (sname, sunits) = header
+    if (pname, punits) != ("period", "s") or sname != "sa":
+        raise InputError(f"{path}: the header must be 'period [s],sa [g]' (or sa [m s-2]); "
+                         f"got {pname} [{punits}],{sname} [{sunits}]")
+    factor = _to_si("sa_wall", sunits, str(path))
+    data = np.array([v for _, v in rows])
+    if np.any(data[:, 0] < 0) or np.any(np.diff(data[:, 0]) <= 0):
+        k = int(np.argmax(np.r_[data[0, 0] < 0, np.diff(data[:, 0]) <= 0]))
+        raise InputError(f"{path}:{rows[k][0]}: periods must be >= 0 and rise from row to "
+                         f"row; got {float(data[k, 0])!r}")
+    if np.any(~np.isfinite(data[:, 1])) or np.any(data[:, 1] <= 0):
+        k = int(np.argmax(~np.isfinite(data[:, 1]) | (data[:, 1] <= 0)))
+        raise InputError(f"{path}:{rows[k][0]}: sa {float(data[k, 1])!r} must be positive")
+    return DesignSpectrum(data[:, 0], data[:, 1] * factor, str(path))
+
+
+def design_sa(spectrum, period) -> np.ndarray:
+    """The design spectral acceleration at `period` [s] (linear in period between the
+    spectrum's rows). [m s-2]
+
+    Parameters
+    ----------
+    spectrum : DesignSpectrum, str or path
+        The spectrum or its CSV file.
+    period : float or array_like
+        Within the spectrum's periods. [s]
+    """
+    s = spectrum if isinstance(spectrum, DesignSpectrum) else read_spectrum(spectrum)
+    t = np.asarray(period, dtype=float)
+    out = (t < s.period[0]) | (t > s.period[-1]) | ~np.isfinite(t)
+    if np.any(out):
+        raise InputError(f"period {float(t[out].flat[0])!r} s is outside the design spectrum "
+                         f"{s.source} ({s.period[0]:g}-{s.period[-1]:g} s)")
+    return np.interp(t, s.period, s.sa)

@@ -1,0 +1,380 @@
+"""The parts of the fragility report made from every intensity measure an IDA archive holds
+and from a site: which measure predicts collapse best (efficiency, sufficiency) and the
+collapse risk (annual rate, probability, the change when the diaphragm is stiffened, the
+margin over a design spectrum), and the tables ``urmx risk`` prints (`risk_lines`).
+
+Nothing here runs an analysis: the capacities in every measure are the scale factors at
+collapse times each record's measure (`urmx.fragility_analysis.capacities`).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from . import fragility_analysis as FA
+from . import plot as P
+from .errors import UrmxError
+from .fragility.fits import CONFIDENCE
+from .fragility_analysis import GROUPS, MEASURES, STIFFEN
+from .markdown import number as _fmt
+from .markdown import table
+from .reporting import save_figure
+
+LEVEL = f"{100 * CONFIDENCE:g} %"
+OLDER = ("_Not available: the archive lacks the scale factor at collapse and the records' "
+         "measures (written by an older urmx); run `urmx ida` again._")
+
+
+def _save(axes, out: Path, name: str) -> str:
+    return save_figure(axes, out, name, dpi=90, palette=True)
+
+
+def _group_name(group: str) -> str:
+    return GROUPS.get(group, group).split(" (")[0]
+
+
+def _has_measures(ds: xr.Dataset) -> bool:
+    try:
+        FA.require_measures(ds)
+    except UrmxError:
+        return False
+    return True
+
+
+# ---- which measure predicts collapse best ----------------------------------------------------
+
+def measure_numbers(ds: xr.Dataset, records_dir=None) -> dict | None:
+    """Efficiency (`urmx.fragility_analysis.efficiency`), sufficiency against the records'
+    magnitude and distance (None when the records' catalog does not give them) and the
+    dispersion in ``sa_avg`` over other period ranges (empty without the records); None
+    for an archive without the measures."""
+    if not _has_measures(ds):
+        return None
+    eff = FA.efficiency(ds)
+    try:
+        mag, dist = FA.record_magnitude_distance(ds, records_dir)
+    except (UrmxError, OSError):
+        mag = dist = np.full(ds.record.size, np.nan)
+    known = np.isfinite(mag) & np.isfinite(dist)
+    suff = FA.sufficiency(ds, mag, dist) if known.sum() >= 5 else None
+    return {"eff": eff, "suff": suff, "alt": FA.sa_avg_alternatives(ds, records_dir),
+            "mag": mag, "dist": dist}
+
+
+def _overall(eff: xr.Dataset) -> dict[str, float]:
+    """Median dispersion over every (wall, diaphragm) per measure."""
+    return {im: float(eff.dispersion.sel(measure=im).median()) for im in MEASURES}
+
+
+def _recommended(m: dict) -> str:
+    overall = _overall(m["eff"])
+    return min(overall, key=overall.get)
+
+
+def measure_findings(m: dict | None) -> list[str]:
+    """The findings bullet: the dispersions and the measure urmx recommends."""
+    if m is None:
+        return []
+    overall = _overall(m["eff"])
+    best = _recommended(m)
+    others = sorted((v for k, v in overall.items() if k != best))
+    wins = int((m["eff"].best == best).sum())
+    n = m["eff"].diaphragm.size
+    share = (overall[best] / others[-1]) ** 2
+    between = m["alt"].get(next(iter(FA.SA_AVG_RANGES)))
+    alone = "" if between is None or best != "sa_avg" else (
+        f" (over the periods between the diaphragm's and the wall's alone, "
+        f"{_fmt(float(between.median()), 2)})")
+    return [f"- **Intensity measure.** The median record-to-record dispersion of the collapse "
+            f"capacity over the walls and diaphragms is {_fmt(overall[best], 2)} in `{best}`"
+            f"{alone} against {_fmt(others[0], 2)}-{_fmt(others[-1], 2)} in the other measures ("
+            + ", ".join(f"`{k}` {_fmt(v, 2)}" for k, v in overall.items() if k != best)
+            + f"); `{best}` is the most efficient on {wins} of {n} diaphragms. For the same "
+            f"confidence in a median it needs about {100 * share:.0f} % of the records the "
+            f"least efficient measure needs (the standard error goes as beta / sqrt(n)). "
+            f"urmx recommends `{best}` (section \"Which intensity measure predicts collapse "
+            "best?\")."]
+
+
+def _efficiency_rows(eff: xr.Dataset) -> list[list]:
+    rows = []
+    for lab in [str(x) for x in eff.diaphragm.values]:
+        e = eff.sel(diaphragm=lab)
+        rows.append([lab] + [_fmt(float(e.typical_dispersion.sel(measure=im)), 2)
+                             for im in MEASURES] + [f"`{str(e.best.values)}`"])
+    overall = _overall(eff)
+    return rows + [["all"] + [_fmt(overall[im], 2) for im in MEASURES]
+                   + [f"`{min(overall, key=overall.get)}`"]]
+
+
+def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
+    """Efficiency table and figure, the sa_avg ranges, sufficiency, the recommendation and
+    the dispersion of every cell with its interval."""
+    lines = ["## Which intensity measure predicts collapse best?", ""]
+    if m is None:
+        return lines + [OLDER, ""]
+    eff = m["eff"]
+    lines += [
+        "One IDA run gives the capacities in every measure: the scale factor at collapse "
+        "(`collapse_scale`) times each record's intensity in the measure (`record_pga`, "
+        "..., `record_sa_avg`), so this section costs no analyses. `sa_avg` is the geometric "
+        "mean of the 5 %-damped Sa at 10 log-spaced periods from max(min(T_d, T_r) / sqrt 2, "
+        "T_r / 2) to sqrt 2 max(T_d, T_r) (T_r: the wall's effective rocking period, T_d: "
+        "its top diaphragm's; `urmx.fragility.sa_avg_range`).", "",
+        "Efficiency: the dispersion beta of the lognormal fit of the capacities in each "
+        "measure, median over the walls of each diaphragm (and over every wall and "
+        "diaphragm: `all`), and the measure with the lowest (`best`):", "",
+        *table(["diaphragm", *MEASURES, "best"], _efficiency_rows(eff)), "",
+        _save(P.plot_efficiency(eff), out, "efficiency.png"), ""]
+    if m["alt"]:
+        rows = [["default (above)", _fmt(_overall(eff)["sa_avg"], 2)]] + [
+            [name, _fmt(float(v.median()), 2)] for name, v in m["alt"].items()]
+        lines += ["The period range of `sa_avg` matters: median dispersion over every wall "
+                  "and diaphragm with other ranges (10 log-spaced periods each; the records' "
+                  "spectra computed again):", "", *table(["sa_avg range", "dispersion"],
+                                                         rows), "",
+                  "The default range was chosen while urmx was developed, on this study, "
+                  "among these and a few other ranges (it gave the lowest dispersion on "
+                  "either half of the records, split by record order or alternately); on "
+                  "other walls or records it is a reasoned start, not a proven optimum.", ""]
+    lines += _sufficiency(m)
+    return lines + _recommendation(m) + _measure_table(ds, eff)
+
+
+def _trends(m: dict, im: str) -> tuple[int, int] | None:
+    """Cases with p < 0.05 on magnitude and on distance of measure `im` (None: unknown)."""
+    s = m["suff"]
+    if s is None:
+        return None
+    r = s.sel(measure=im)
+    return int((r.p_magnitude < 0.05).sum()), int((r.p_distance < 0.05).sum())
+
+
+def _recommendation(m: dict) -> list[str]:
+    """Which measure urmx recommends for walls on flexible diaphragms, and why, from the
+    numbers above."""
+    eff = m["eff"]
+    overall = _overall(eff)
+    best = _recommended(m)
+    second = sorted(overall, key=overall.get)[1]
+    wins = [str(d) for d, b in zip(eff.diaphragm.values, eff.best.values, strict=True)
+            if str(b) == best]
+    others = {str(d): str(b) for d, b in zip(eff.diaphragm.values, eff.best.values,
+                                             strict=True) if str(b) != best}
+    text = (f"**Recommendation.** For walls on flexible diaphragms urmx recommends `{best}`: "
+            f"its capacities have the lowest median dispersion ({_fmt(overall[best], 2)}, "
+            f"against {_fmt(overall[second], 2)} for the next, `{second}`) and the lowest "
+            f"on {len(wins)} of {eff.diaphragm.size} diaphragm cases")
+    if others:
+        text += " (elsewhere " + ", ".join(f"`{b}` on {d}" for d, b in others.items()) + ")"
+    text += (f"; the records needed for the same confidence in a median scale with beta "
+             f"squared, so `{best}` needs about "
+             f"{100 * (overall[best] / overall[second]) ** 2:.0f} % of the records "
+             f"`{second}` needs")
+    trends = _trends(m, best)
+    if trends is not None:
+        n = int(np.isfinite(m["suff"].p_magnitude.sel(measure=best)).sum())
+        text += (f", and its residuals trend with magnitude in {trends[0]} and with "
+                 f"distance in {trends[1]} of {n} cases (p < 0.05)")
+    def span(im: str) -> str:
+        t = eff.typical_dispersion.sel(measure=im)
+        lo, hi = str(t.idxmin("diaphragm").values), str(t.idxmax("diaphragm").values)
+        return (f"from {_fmt(float(t.sel(diaphragm=lo)), 2)} on {lo} to "
+                f"{_fmt(float(t.sel(diaphragm=hi)), 2)} on {hi}")
+
+    return [text + f". Over the diaphragms `sa_diaphragm` runs {span('sa_diaphragm')}, "
+            f"`{best}` {span(best)}.", ""]
+
+
+def _sufficiency(m: dict) -> list[str]:
+    lines = ["### Sufficiency", ""]
+    s = m["suff"]
+    if s is None:
+        return lines + ["_Not available: the records' magnitudes and distances are not known "
+                        "(record manifest and library/catalog.tsv of the records folder)._", ""]
+    n = int(np.isfinite(s.p_magnitude.sel(measure=MEASURES[0])).sum())
+    rows = []
+    for im in MEASURES:
+        r = s.sel(measure=im)
+        rows.append([f"`{im}`", _fmt(float(r.slope_magnitude.median()), 2),
+                     f"{int((r.p_magnitude < 0.05).sum())}/{n}",
+                     _fmt(float(r.slope_distance.median()), 2),
+                     f"{int((r.p_distance < 0.05).sum())}/{n}"])
+    mag, dist = m["mag"], m["dist"]
+    return lines + [
+        "Per wall and diaphragm, the residuals ln(capacity) - mean over the records that "
+        "collapse the wall, regressed on the records' moment magnitude and on ln(rupture "
+        f"distance) (Luco & Cornell 2007; magnitudes {np.nanmin(mag):g}-{np.nanmax(mag):g}, "
+        f"distances {np.nanmin(dist):g}-{np.nanmax(dist):g} km from the record manifest and "
+        "the record library's catalog): the median slope over the cases and the cases whose "
+        "slope has p < 0.05. A sufficient measure leaves no trend: about 5 % of cases at "
+        "p < 0.05 by chance, though the cases share their records (and the records come in "
+        "pairs of components of one station), so they are not independent.", "",
+        *table(["measure", "slope on magnitude [1/unit M]", "cases p < 0.05",
+                "slope on ln distance [1]", "cases p < 0.05"], rows), ""]
+
+
+def _measure_table(ds: xr.Dataset, eff: xr.Dataset) -> list[str]:
+    rows = []
+    for lab in [str(x) for x in eff.diaphragm.values]:
+        for w in eff.wall.values:
+            e = eff.sel(diaphragm=lab, wall=w)
+            rows.append([lab, str(w)] + [
+                f"{_fmt(float(e.dispersion.sel(measure=im)), 2)} "
+                f"[{_fmt(float(e.dispersion_lower.sel(measure=im)), 2)}-"
+                f"{_fmt(float(e.dispersion_upper.sel(measure=im)), 2)}]" for im in MEASURES])
+    return ["### Dispersion of every wall and diaphragm", "",
+            f"Dispersion beta in each measure with its {LEVEL} bootstrap interval:", "",
+            *table(["diaphragm", "wall", *MEASURES], rows), ""]
+
+
+# ---- collapse risk ---------------------------------------------------------------------------
+
+def risk_numbers(ds: xr.Dataset, hazard, spectrum, years: float) -> dict | None:
+    """The collapse risk per (wall, diaphragm) over `hazard`, its change when the diaphragm
+    is stiffened, and the margins over `spectrum` (None without the measures)."""
+    from .fragility import read_hazard
+
+    if not _has_measures(ds):
+        return None
+    curve = read_hazard(hazard)
+    risk = FA.collapse_risk(ds, curve, years)
+    return {"curve": curve, "risk": risk, "change": FA.risk_change(risk),
+            "margins": None if spectrum is None else FA.margins(ds, spectrum),
+            "years": years}
+
+
+def _rate(v: float) -> str:
+    return "-" if not np.isfinite(v) else f"{v:.2g}"
+
+
+def risk_findings(r: dict | None) -> list[str]:
+    """Findings bullets: the range of the rates and the change when stiffening."""
+    if r is None:
+        return []
+    risk, years = r["risk"], r["years"]
+    low = risk.rate.where(risk.rate == risk.rate.min(), drop=True)
+    high = risk.rate.where(risk.rate == risk.rate.max(), drop=True)
+    lines = [f"- **Collapse risk at the illustrative site** ({Path(r['curve'].source).name}). "
+             f"The mean annual frequency of collapse runs from {_rate(float(risk.rate.min()))}"
+             f" ({str(low.wall.values[0])} on {str(low.diaphragm.values[0])}) to "
+             f"{_rate(float(risk.rate.max()))} ({str(high.wall.values[0])} on "
+             f"{str(high.diaphragm.values[0])}) per year: a probability of collapse in "
+             f"{years:g} years of {100 * float(risk.probability.min()):.2g} % to "
+             f"{100 * float(risk.probability.max()):.2g} %."]
+    for g, v in r["change"].items():
+        ratio = v["ratio"]
+        down = [str(w) for w in ratio.wall.values if float(ratio.sel(wall=w)) < 1.0]
+        lines.append(f"- **Stiffening {v['soft']} -> {v['stiff']} in annual risk, "
+                     f"{_group_name(g)} walls.** The rate of collapse changes by a factor "
+                     f"{_fmt(float(ratio.min()), 2)} to {_fmt(float(ratio.max()), 2)}; it "
+                     f"falls for {len(down)} of {ratio.wall.size} walls.")
+    return lines
+
+
+def risk_lines(ds: xr.Dataset, r: dict, heading: str = "###") -> list[str]:
+    """The tables of the collapse risk: rate (with interval) and probability per wall and
+    diaphragm, the change when stiffening, the margins (what ``urmx risk`` prints)."""
+    risk, curve, years = r["risk"], r["curve"], r["years"]
+    f, unit = P.display_scale(curve.units)
+    d = FA.first_cor(ds)
+    lines = []
+    for g, labels in FA.supports_groups(d).items():
+        rows = [[str(w), f"{float(d.slenderness.sel(wall=w)):.0f}"] + [
+            f"{_rate(float(c.rate))} [{_rate(float(c.rate_lower))}-"
+            f"{_rate(float(c.rate_upper))}], {100 * float(c.probability):.2g} %"
+            for c in (risk.sel(wall=w, diaphragm=lab) for lab in labels)]
+            for w in d.wall.values]
+        lines += [f"{heading} {GROUPS.get(g, g).capitalize()}", "",
+                  f"Mean annual frequency of collapse [1/yr] with its {LEVEL} bootstrap "
+                  f"interval, and the probability of collapse in {years:g} years:", "",
+                  *table(["wall", "h/t", *labels], rows), ""]
+    lines += _change_lines(d, r, heading)
+    if r["margins"] is not None:
+        lines += _margin_lines(d, r, heading)
+    tail = float(risk.tail_share.max())
+    lines += [f"Fits in `{curve.im}` [{unit}] of the capacities at COR {float(d.cor):g}; "
+              f"at most {100 * tail:.2g} % of a rate comes from beyond the hazard curve's "
+              f"intensities ({_fmt(curve.intensity[0] * f)}-{_fmt(curve.intensity[-1] * f)} "
+              f"{unit}, extended along its end segments).", ""]
+    return lines
+
+
+def _change_lines(d: xr.Dataset, r: dict, heading: str) -> list[str]:
+    change = r["change"]
+    if not change:
+        return [f"_No stiffening: the archive lacks {STIFFEN[0]} or {STIFFEN[1]}._", ""]
+    head, rows = ["wall", "h/t"], []
+    for g, v in change.items():
+        head += [f"{v['soft']} [1/yr]", f"{v['stiff']} [1/yr]", f"{_group_name(g)}: ratio"]
+    for w in d.wall.values:
+        row = [str(w), f"{float(d.slenderness.sel(wall=w)):.0f}"]
+        for v in change.values():
+            row += [_rate(float(v["rate_soft"].sel(wall=w))),
+                    _rate(float(v["rate_stiff"].sel(wall=w))),
+                    _fmt(float(v["ratio"].sel(wall=w)), 2)]
+        rows.append(row)
+    return [f"{heading} Stiffening the diaphragm: {STIFFEN[0]} -> {STIFFEN[1]}", "",
+            "The mean annual frequency of collapse with the as-built and the stiffened "
+            "diaphragm, and their ratio (below 1: the retrofit lowers the risk):", "",
+            *table(head, rows), ""]
+
+
+def _margin_lines(d: xr.Dataset, r: dict, heading: str) -> list[str]:
+    mg = r["margins"]
+    f, unit = P.display_scale("m s-2")
+    lines = [f"{heading} Margin over the design spectrum", "",
+             f"The median collapse capacity in `sa_wall` over the design spectrum's Sa at the "
+             f"wall's rocking period ({Path(mg.attrs['spectrum']).name}; below 1: the median "
+             "wall collapses under the design spectrum's intensity at its period; T_r and "
+             "the design Sa of the group's first diaphragm):", ""]
+    for g, labels in FA.supports_groups(d).items():
+        rows = [[str(w), f"{float(d.slenderness.sel(wall=w)):.0f}",
+                 f"{float(d.rocking_period.sel(wall=w, diaphragm=labels[0])):.2f}",
+                 _fmt(float(mg.design_sa.sel(wall=w, diaphragm=labels[0])) * f)]
+                + [_fmt(float(mg.margin.sel(wall=w, diaphragm=lab)), 3) for lab in labels]
+                for w in d.wall.values]
+        lines += [f"{GROUPS.get(g, g).capitalize()}:", "",
+                  *table(["wall", "h/t", "T_r [s]", f"design Sa(T_r) [{unit}]", *labels],
+                         rows), ""]
+    return lines
+
+
+def _closed_form(r: dict) -> list[str]:
+    """The Cornell et al. (2002) closed form next to the integral when the hazard curve is a
+    power law."""
+    curve, risk = r["curve"], r["risk"]
+    lx, ll = np.log(curve.intensity), np.log(curve.rate)
+    k, b = np.polyfit(lx, ll, 1)
+    if np.max(np.abs(ll - (k * lx + b))) > 1e-3:
+        return []
+    cell = risk.isel(wall=risk.wall.size // 2, diaphragm=0)
+    med, beta = float(cell.median_collapse_intensity), float(cell.dispersion)
+    exact = math.exp(b) * med ** k * math.exp(k * k * beta * beta / 2)
+    return [f"Check: the hazard curve is a power law (k = {-k:.3g}); the closed form "
+            "k0 median^-k exp(k^2 beta^2 / 2) (Cornell et al. 2002) gives "
+            f"{_rate(exact)} per year for {str(cell.wall.values)} on "
+            f"{str(cell.diaphragm.values)}, the integral {_rate(float(cell.rate))} "
+            f"(difference {100 * (float(cell.rate) / exact - 1):.1g} %).", ""]
+
+
+def risk_section(ds: xr.Dataset, r: dict | None, out: Path) -> list[str]:
+    """The "Collapse risk" section of the fragility report."""
+    lines = ["## Collapse risk", ""]
+    if r is None:
+        return lines + [OLDER, ""]
+    curve = r["curve"]
+    lines += [
+        f"The fragility of each wall integrated over a hazard curve "
+        f"(`urmx.fragility.collapse_rate`; `{Path(curve.source).name}` of `catalog/hazard/`: "
+        "an **illustrative** curve, a power law fitted to the NZS 1170.5 site spectrum at "
+        "T = 0 for site class D and Z = 0.3 between 250 and 2500 years, see the file's "
+        "header; not the hazard of any real site). Same in two commands: `urmx ida` then "
+        "`urmx risk ARCHIVE --hazard curve.csv`.", "",
+        _save(P.plot_collapse_risk(r["risk"], curve), out, "collapse_risk.png"), "",
+        *_closed_form(r), *risk_lines(ds, r)]
+    return lines

@@ -155,6 +155,118 @@ def test_a_million_cells_resume_after_a_kill_with_another_batch_size(million, tm
     assert float(cell) == pytest.approx(2.0 * 2.0 * 3.68 * 0.7 * 0.5, rel=1e-12)
 
 
+# ---- the grid kind: a COR x scale grid of 10^6 analyses, and a real one killed -------------
+
+COR_SCALE = """\
+[study]
+name = "cor-scale-grid"
+walls = ["s16"]
+diaphragms = ["D1"]
+records = ["quake"]
+cor = {start = 0.5, stop = 0.9995, step = 0.0005}
+scale = {start = 0.001, stop = 1.0, step = 0.001}
+"""
+
+
+def test_a_million_analysis_cor_scale_grid_is_cut_into_many_batches(make_study, use_records):
+    """1 wall x 1 diaphragm x 1 record over 1000 CORs x 1000 scales: 10^6 analyses of the
+    grid kind, cut into many batches from the plan alone (nothing runs). On main at 8b38483
+    (and 7ab99c0) the grid was cut by wall only: one batch of 10^6 analyses whatever
+    --batch-size, run in the main process."""
+    use_records(ACC, SCALE, DT)
+    study = load_study(make_study(COR_SCALE, "cor-scale.toml"))
+    grid_kind = kinds.get("grid")
+    size = st.size_of(study, grid_kind)
+    assert (size.cells, size.runs, size.unit) == (CELLS, CELLS, "analyses")
+    records = st.resolve_records(study)
+    cells = Cells(study, grid_kind, records)
+    assert cells.shape == (1, 1, 1, 1000, 1000)
+    assert Cut(cells, 16).counts() == (0, 63_000)  # the default --batch-size
+    tasks = st.batch_tasks(study, records, 4000)
+    assert len(tasks) == 250 and {b.size for b, _ in tasks} == {4000}
+    assert len({b.key for b, _ in tasks}) == 250
+    first, task = tasks[0]
+    assert (first.block["cor"], len(first.block["scale"])) == ([0, 1, 2, 3], 1000)
+    assert task["cor"] == [0.5, 0.5005, 0.501, 0.5015] and len(task["scale"]) == 1000
+    keys = np.concatenate([b.cells.ravel() for b, _ in tasks])
+    assert keys.size == CELLS and np.unique(keys).size == CELLS
+
+
+REAL_SLEEP = "URMX_REAL_SLEEP"  # seconds the real-kernel stand-in waits per analysis
+REAL_CALLS: list = []
+PULSE = {"pulse": 3.0 * np.sin(2 * np.pi * 2.0 * np.arange(150) * 0.01)}
+PULSE_SCALE = {"pulse": 1.0}
+REAL_GRID = """\
+[study]
+name = "real-cor-scale"
+walls = ["s16"]
+diaphragms = ["D1"]
+records = ["pulse"]
+cor = {start = 0.70, stop = 0.89, step = 0.01}
+scale = {start = 0.5, stop = 2.9, step = 0.1}
+"""
+REAL_RUNS = 20 * 25
+
+
+def slow_real(*args, **kw):
+    """`urmx.kernel.run`, counted in :data:`REAL_CALLS` and slowed by ``$URMX_REAL_SLEEP``
+    (so that a child process can be killed partway); its name is part of the cells' keys,
+    the same in the child and here."""
+    from urmx.kernel import run
+
+    REAL_CALLS.append(1)
+    time.sleep(float(os.environ.get(REAL_SLEEP, "0")))
+    return run(*args, **kw)
+
+
+REAL_RUN = """\
+import sys
+import urmx
+import tests.test_cells as T
+from tests.fixtures.pinned import served
+
+with served(T.PULSE, T.PULSE_SCALE, 0.01):
+    urmx.run_study(sys.argv[1], out=sys.argv[2], scheduler="serial", progress=False,
+                   batch_size=int(sys.argv[3]), kernel=T.slow_real)
+"""
+
+
+def test_a_real_cor_scale_grid_resumes_after_a_kill_with_another_batch_size(
+        make_study, use_records, tmp_path):
+    """The grid kind on the real kernel, 1 wall x 1 diaphragm x 1 record x 20 CORs x 25
+    scales: SIGKILL of the run (batches of 8) once 10 parts are saved; the resumed run, with
+    batches of 25, keeps every finished batch, computes exactly the analyses not saved, and
+    its archive holds the values of an uninterrupted run on `urmx.kernel.run`."""
+    use_records(PULSE, PULSE_SCALE, 0.01)
+    path = make_study(REAL_GRID, "real.toml")
+    out = tmp_path / "real.nc"
+    parts = tmp_path / "real.nc.parts"
+    count = killed_after_parts(["-c", REAL_RUN, str(path), str(out), "8"], parts, 10,
+                               dict(os.environ, **{REAL_SLEEP: "0.03"}))
+    assert 10 <= count < 80 and not out.exists()  # 20 CORs x 4 pieces of the 25 scales
+    kept = {p.name: int(np.load(p)["cell_key"].size) for p in parts.glob("*.npz")}
+    saved = sum(kept.values())
+    assert len(kept) == count and set(kept.values()) <= {7, 4}  # 7 + 7 + 7 + 4 scales
+    REAL_CALLS.clear()
+    err = io.StringIO()
+    stderr, sys.stderr = sys.stderr, err
+    try:
+        ds = st.run_study(path, out=out, scheduler="serial", progress=True, batch_size=25,
+                          kernel=slow_real).load()
+    finally:
+        sys.stderr = stderr
+    run = st.last_run()
+    assert (run.from_parts, run.computed, run.runs) == (saved, REAL_RUNS - saved, REAL_RUNS)
+    assert len(REAL_CALLS) == REAL_RUNS - saved  # no finished analysis computed again
+    assert f"resuming from {parts}: {saved:,} of {REAL_RUNS:,} analyses found" in err.getvalue()
+    assert not parts.exists()
+    reference = st.run_study(path, scheduler="serial", progress=False, batch_size=500)
+    assert int((reference.status == 0).sum()) > 0 and int((reference.status == 1).sum()) > 0
+    for name in reference.data_vars:
+        assert np.asarray(ds[name].values).tobytes() == \
+            np.asarray(reference[name].values).tobytes(), name
+
+
 # ---- the grid kind: resume with another batch size ------------------------------------------
 
 GRID = """\
@@ -310,6 +422,77 @@ def test_an_extended_study_computes_only_its_new_cells(make_study, own_records, 
     fresh = st.run_study(_own(make_study, **change), records_dir=own_records,
                          kernel=_counting(calls), scheduler="serial", progress=False)
     _same(ds, fresh)
+
+
+def _quiet_run(*args, **kw) -> tuple[xr.Dataset, str]:
+    """`urmx.run_study` with progress on, returning (the archive loaded, what it said)."""
+    err = io.StringIO()
+    saved, sys.stderr = sys.stderr, err
+    try:
+        ds = st.run_study(*args, progress=True, **kw).load()
+    finally:
+        sys.stderr = saved
+    return ds, err.getvalue()
+
+
+def test_own_record_files_and_wall_extended_by_a_fourth_record(tmp_path):
+    """Issue 22: three own record files (an AT2, one channel of a multi-channel V2A, a plain
+    file with dt and unit) and an own wall with its own diaphragm, on the real kernel; the
+    same study with a fourth record computes exactly its 2 new cells and takes the 6 others
+    from the archive, bitwise equal; the archive lists every record's sha256 and file name;
+    after one record file is edited, a third run computes that record's cells again."""
+    import hashlib
+    import shutil
+
+    from .fixtures.records import record_file
+    from .test_study_files import AT2, OWN, PLAIN, V2A
+
+    data = tmp_path / "data"
+    data.mkdir()
+    for rel, name in ((AT2, None), (V2A, None), (PLAIN, "my-record.txt"),
+                      ("formats/peer/RSN763_LOMAP_GIL337.AT2", None)):
+        src = record_file(rel)
+        shutil.copy(src, data / (name or src.name))
+    three = tmp_path / "three.toml"
+    three.write_text(OWN, encoding="utf-8")
+    four = tmp_path / "four.toml"
+    four.write_text(OWN.replace('records = ["gilroy", "wtmc", "mine"]',
+                                'records = ["gilroy", "wtmc", "mine", "gil337"]')
+                    + '\n[records.gil337]\nfile = "data/RSN763_LOMAP_GIL337.AT2"\n',
+                    encoding="utf-8")
+    out = tmp_path / "own.nc"
+    first, _ = _quiet_run(three, out=out, scheduler="serial")
+    assert (st.last_run().from_archive, st.last_run().computed) == (0, 6)
+    second, said = _quiet_run(four, out=out, scheduler="serial")
+    assert (st.last_run().from_archive, st.last_run().computed) == (6, 2)
+    assert "urmx own-files: 6 of 8 analyses reused (0 from parts, 6 from the archive), " \
+           "2 to compute" in said
+    old = second.sel(record=["gilroy", "wtmc", "mine"])
+    for name in first.data_vars:  # bitwise: every bit of every old cell
+        assert np.asarray(first[name].values).tobytes() == \
+            np.asarray(old[name].values).tobytes(), name
+    files = {"gilroy": "data/RSN763_LOMAP_GIL067.AT2",
+             "wtmc": "data/20161113_110259_WTMC_20.V2A", "mine": "data/my-record.txt",
+             "gil337": "data/RSN763_LOMAP_GIL337.AT2"}
+    assert list(second.record.values) == list(files)
+    assert list(second.record_file.values) == list(files.values())
+    assert list(second.record_sha256.values) == [
+        hashlib.sha256((tmp_path / f).read_bytes()).hexdigest() for f in files.values()]
+    fresh = st.run_study(four, scheduler="serial", progress=False)
+    for name in fresh.data_vars:
+        assert np.asarray(fresh[name].values).tobytes() == \
+            np.asarray(second[name].values).tobytes(), name
+    # one record file edited (a header line; its samples are the same): its cells again
+    at2 = data / "RSN763_LOMAP_GIL067.AT2"
+    lines = at2.read_text().splitlines(keepends=True)
+    lines[1] = lines[1].replace("Loma Prieta", "Loma Prieta (edited)")
+    at2.write_text("".join(lines))
+    third, said = _quiet_run(four, out=out, scheduler="serial")
+    assert (st.last_run().from_archive, st.last_run().computed) == (6, 2)
+    assert "6 of 8 analyses reused (0 from parts, 6 from the archive), 2 to compute" in said
+    assert str(third.record_sha256.sel(record="gilroy").values) == \
+        hashlib.sha256(at2.read_bytes()).hexdigest() != \
+        str(second.record_sha256.sel(record="gilroy").values)
 
 
 def test_a_changed_record_file_is_computed_again(make_study, own_records, tmp_path):

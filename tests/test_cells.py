@@ -34,6 +34,7 @@ from urmx.study.dataset import coord, grid_coords
 from urmx.study.limits import SizeError
 
 from .fixtures.signals import killed_after_parts
+from .test_kinds import _same
 from .test_study import fake_kernel
 
 # ---- a vectorised stand-in kind over cor x scale ------------------------------------------
@@ -117,10 +118,17 @@ import urmx
 import tests.test_cells as T
 from tests.fixtures.pinned import served
 
-with served(T.ACC, T.SCALE, T.DT):
+with served(T.{acc}, T.{scale}, {dt}):
     urmx.run_study(sys.argv[1], out=sys.argv[2], scheduler="serial", progress=False,
-                   batch_size=int(sys.argv[3]))
+                   batch_size=int(sys.argv[3]){kernel})
 """
+
+
+def _child(acc: str = "ACC", scale: str = "SCALE", dt: float = DT, kernel: str = "") -> str:
+    """The script of a child process that runs a study on in-memory records (this module's
+    `acc` and `scale`), with ``kernel=T.<kernel>`` when given."""
+    return RUN.format(acc=acc, scale=scale, dt=dt, kernel=f", kernel=T.{kernel}" if kernel
+                      else "")
 
 
 def _values(ds: xr.Dataset) -> np.ndarray:
@@ -133,7 +141,7 @@ def test_a_million_cells_resume_after_a_kill_with_another_batch_size(million, tm
     cells the killed run did not save, and its archive equals an uninterrupted run's."""
     out = tmp_path / "million.nc"
     parts = tmp_path / "million.nc.parts"
-    kept = killed_after_parts(["-c", RUN, str(million), str(out), "4000"], parts, 20,
+    kept = killed_after_parts(["-c", _child(), str(million), str(out), "4000"], parts, 20,
                               dict(os.environ, **{SLEEP: "0.1"}))
     assert 20 <= kept < 250 and not out.exists()
     err = io.StringIO()
@@ -157,15 +165,7 @@ def test_a_million_cells_resume_after_a_kill_with_another_batch_size(million, tm
 
 # ---- the grid kind: a COR x scale grid of 10^6 analyses, and a real one killed -------------
 
-COR_SCALE = """\
-[study]
-name = "cor-scale-grid"
-walls = ["s16"]
-diaphragms = ["D1"]
-records = ["quake"]
-cor = {start = 0.5, stop = 0.9995, step = 0.0005}
-scale = {start = 0.001, stop = 1.0, step = 0.001}
-"""
+COR_SCALE = MILLION.split("\n[study.sweep]")[0].replace('"cor-scale"', '"cor-scale-grid"')
 
 
 def test_a_million_analysis_cor_scale_grid_is_cut_into_many_batches(make_study, use_records):
@@ -219,18 +219,6 @@ def slow_real(*args, **kw):
     return run(*args, **kw)
 
 
-REAL_RUN = """\
-import sys
-import urmx
-import tests.test_cells as T
-from tests.fixtures.pinned import served
-
-with served(T.PULSE, T.PULSE_SCALE, 0.01):
-    urmx.run_study(sys.argv[1], out=sys.argv[2], scheduler="serial", progress=False,
-                   batch_size=int(sys.argv[3]), kernel=T.slow_real)
-"""
-
-
 def test_a_real_cor_scale_grid_resumes_after_a_kill_with_another_batch_size(
         make_study, use_records, tmp_path):
     """The grid kind on the real kernel, 1 wall x 1 diaphragm x 1 record x 20 CORs x 25
@@ -241,7 +229,8 @@ def test_a_real_cor_scale_grid_resumes_after_a_kill_with_another_batch_size(
     path = make_study(REAL_GRID, "real.toml")
     out = tmp_path / "real.nc"
     parts = tmp_path / "real.nc.parts"
-    count = killed_after_parts(["-c", REAL_RUN, str(path), str(out), "8"], parts, 10,
+    script = _child("PULSE", "PULSE_SCALE", 0.01, "slow_real")
+    count = killed_after_parts(["-c", script, str(path), str(out), "8"], parts, 10,
                                dict(os.environ, **{REAL_SLEEP: "0.03"}))
     assert 10 <= count < 80 and not out.exists()  # 20 CORs x 4 pieces of the 25 scales
     kept = {p.name: int(np.load(p)["cell_key"].size) for p in parts.glob("*.npz")}
@@ -305,13 +294,6 @@ def grid(make_study, use_records):
 
     use_records(ACC2, SCALE2, DT)
     return make_study(GRID, "grid.toml")
-
-
-def _same(a: xr.Dataset, b: xr.Dataset) -> None:
-    a, b = a.copy(), b.copy()
-    for ds in (a, b):
-        ds.attrs["history"] = ds.attrs["history"].split(" ", 1)[1]
-    xr.testing.assert_identical(a, b)
 
 
 @pytest.mark.parametrize("first, second", [(7, 30), (30, 7), (4, 1)])

@@ -304,7 +304,7 @@ def render(d: dict, figures_dir: str = "performance") -> list[str]:
           f"{d['write_bound_mb']:.0f} MB: {verdict(d['met_write'])}). It holds two int32 per "
           "cell (where each result lies) and no result; the results go to part files as "
           "they arrive, and the archive is gathered from them one 2^17-cell slab at a time "
-          "with a 2 MiB netCDF chunk cache per variable.", ""]
+          "with no netCDF chunk cache (each slab is one whole chunk, written once).", ""]
     if d.get("figure"):
         L += [f"![RSS of every process over the run]({figures_dir}/{d['figure']})", ""]
     per_batch = d["analyses"] / d["batches"]

@@ -392,3 +392,27 @@ def test_version_option_says_which_code_runs(capsys):
     assert capsys.readouterr().out == f"urmx {urmx.provenance.code_version()}\n"
     if (C.ROOT / ".git").exists():
         assert urmx.provenance.code_version().startswith(f"{urmx.__version__}+g")
+
+
+def test_a_script_without_a_main_guard_is_told_what_to_do(tmp_path, records_dir):
+    """A script calling run_study at its top level, run where the study starts a local
+    cluster: each worker process imports the script again and used to run the study a
+    second time (tracebacks of 'another urmx run is writing', then 'Nanny failed to
+    start'). Now each worker stops with one line, and run_study's error says the fix."""
+    import os
+
+    script = tmp_path / "unguarded.py"
+    script.write_text('import urmx\n'
+                      'urmx.run_study("paper-single-storey", out="a.nc", progress=False)\n')
+    env = dict(os.environ, URMX_RECORDS=str(records_dir), DASK_URMX__SERIAL_BELOW="0")
+    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=300)
+    err = proc.stderr
+    assert proc.returncode == 1
+    assert "another urmx run" not in err and "spawn_main" not in err, err
+    worker = [ln for ln in err.splitlines() if ln.startswith("urmx: a worker process")]
+    assert worker and all(ln == worker[0] for ln in worker)
+    assert 'under `if __name__ == "__main__":`' in worker[0]
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("urmx.errors.RunError: the local dask cluster did not start ")
+    assert clients.UNGUARDED in last

@@ -89,6 +89,24 @@ def _quiet_workers():
     return QuietWorkers()
 
 
+#: why a script must guard its call of run_study when the study starts a local cluster
+UNGUARDED = ("a script that calls urmx.run_study must call it under "
+             "`if __name__ == \"__main__\":` (the local cluster's worker processes import "
+             "the script again, and each would start the study)")
+
+
+def refuse_in_worker_import() -> None:
+    """Stop a worker process that is importing the user's script (``__mp_main__``, how
+    dask's worker processes start) and reaches ``run_study`` at the script's top level:
+    with one line, not a second run of the study that fails on the archive's lock."""
+    # while multiprocessing's spawn runs the script as ``__mp_main__``, ``__main__`` is
+    # still the process's bootstrap module; afterwards both names are the script
+    importing = sys.modules.get("__mp_main__")
+    if importing is not None and sys.modules.get("__main__") is not importing:
+        raise SystemExit(f"urmx: a worker process reached run_study while importing the "
+                         f"script: {UNGUARDED}")
+
+
 def local_client(n_workers: int | None = None, threads: bool = False):
     """A ``distributed.Client`` on a new local cluster.
 
@@ -131,13 +149,16 @@ def local_client(n_workers: int | None = None, threads: bool = False):
             client.register_plugin(_quiet_workers())
         if block:
             signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # a pending Ctrl-C: now
-    except BaseException:
+    except BaseException as err:
         if block:
             signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         if client is not None:
             close_client(client)
         elif cluster is not None:
             cluster.close()
+        if isinstance(err, Exception) and not threads:
+            raise RunError(f"the local dask cluster did not start ({type(err).__name__}: "
+                           f"{err}); {UNGUARDED}") from err
         raise
     return client
 

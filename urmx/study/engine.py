@@ -87,6 +87,7 @@ from .clients import (
     mismatch,
     quiet_client,
     record_samples,
+    refuse_in_worker_import,
     release,
     run_stamped,
     setting,
@@ -683,6 +684,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         a cluster that lost a batch for good, a worker that runs other code, no worker left
         for ``urmx.worker-timeout`` seconds or the scheduler gone (`urmx.errors.RunError`).
     """
+    refuse_in_worker_import()
     _check_batch_size(batch_size)
     check_scheduler(scheduler)
     s = study if isinstance(study, Study) else load_study(study)

@@ -669,9 +669,8 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     -------
     xarray.Dataset
         The study kind's Dataset (`urmx.study.kinds`): with `out`, the archive reopened
-        lazily (`urmx.open_study`), else in memory. Outputs of cells that were not run,
-        or have no valid result, are NaN (integer outputs are float64 in memory, int32 with
-        ``_FillValue`` -1 on disk).
+        lazily (`urmx.open_study`), else in memory. Outputs of cells not run or with no
+        valid result are NaN (integers: float64 in memory, int32 with _FillValue -1 on disk).
 
     Raises
     ------

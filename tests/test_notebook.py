@@ -53,7 +53,7 @@ def test_own_study_notebook_runs(records_dir, tmp_path, monkeypatch):
 
     files = {"wtmc": "formats/geonet/20161113_110259_WTMC_20.V2A",
              "gilroy": "formats/peer/RSN763_LOMAP_GIL067.AT2",
-             "elcentro": "elcentro1940/elcentro_S00E_1940.dat"}
+             "s00e": "elcentro1940/elcentro_S00E_1940.dat"}
     paths = {k: record_file(v) for k, v in files.items()}
     nb, joined = _execute(OWN_STUDY, records_dir, tmp_path, monkeypatch)
     # the multi-channel file: its channels, and refused without one
@@ -74,6 +74,6 @@ def test_own_study_notebook_runs(records_dir, tmp_path, monkeypatch):
         digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
         assert f"{rid}: {Path(path).name} " in joined and f"sha256 {digest}" in joined
     assert "wtmc: 20161113_110259_WTMC_20.V2A channel S62W [mm/s2]" in joined
-    assert "elcentro: elcentro_S00E_1940.dat channel" in joined
+    assert "s00e: elcentro_S00E_1940.dat channel - [cm/s2] dt 0.02 s" in joined
     assert _has_figure(nb)
     assert not list(DOCS.glob("*.nc")) and not list(DOCS.glob("*.toml"))  # nothing in docs/

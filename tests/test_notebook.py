@@ -11,41 +11,50 @@ import pytest
 
 from .fixtures.records import record_file
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
-NOTEBOOK = DOCS / "fragility.ipynb"
-OWN_STUDY = DOCS / "own-study.ipynb"
+NOTEBOOK = Path(__file__).resolve().parent.parent / "docs" / "fragility.ipynb"
+OWN_STUDY = NOTEBOOK.parent / "own-study.ipynb"
+
+
+def test_fragility_notebook_runs(records_dir, tmp_path, monkeypatch):
+    record_file("library/catalog.tsv")  # the FEMA P695 library the notebook's grid uses
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    monkeypatch.setenv("URMX_RECORDS", str(records_dir))
+    monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel draws inline
+    nb = nbformat.read(NOTEBOOK, as_version=4)
+    assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")  # stored clean
+    nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    text = {}
+    for i, cell in enumerate(nb.cells):
+        out = []
+        for o in cell.get("outputs", []):
+            assert o.output_type != "error", o
+            out.append(o.get("text", "") or str(o.get("data", {}).get("text/plain", "")))
+        text[i] = "\n".join(out)
+    joined = "\n".join(text.values())
+    assert "collapse PGA" in joined and "censored: False" in joined
+    assert "True {'wall': 3, 'diaphragm': 3, 'record': 8, 'cor': 1" in joined  # lazy, sizes
+    assert "stripes:" in joined
+    assert any(o.output_type == "display_data" and "image/png" in o.get("data", {})
+               for c in nb.cells for o in c.get("outputs", []))  # the fragility curve
 
 
 def _execute(path: Path, records_dir, tmp_path, monkeypatch):
-    """Execute the notebook at `path` in `tmp_path`; return it and its text outputs."""
+    """Execute the notebook at `path` in `tmp_path` (stored without outputs, none an error);
+    return it and its text outputs joined."""
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     monkeypatch.setenv("URMX_RECORDS", str(records_dir))
     monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel draws inline
     nb = nbformat.read(path, as_version=4)
-    assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")  # stored clean
+    assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")
     nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
                             resources={"metadata": {"path": str(tmp_path)}}).execute()
-    out = []
-    for cell in nb.cells:
-        for o in cell.get("outputs", []):
-            assert o.output_type != "error", o
-            out.append(o.get("text", "") or str(o.get("data", {}).get("text/plain", "")))
-    return nb, "\n".join(out)
-
-
-def _has_figure(nb) -> bool:
-    return any(o.output_type == "display_data" and "image/png" in o.get("data", {})
-               for c in nb.cells for o in c.get("outputs", []))
-
-
-def test_fragility_notebook_runs(records_dir, tmp_path, monkeypatch):
-    record_file("library/catalog.tsv")  # the FEMA P695 library the notebook's grid uses
-    nb, joined = _execute(NOTEBOOK, records_dir, tmp_path, monkeypatch)
-    assert "collapse PGA" in joined and "censored: False" in joined
-    assert "True {'wall': 3, 'diaphragm': 3, 'record': 8, 'cor': 1" in joined  # lazy, sizes
-    assert "stripes:" in joined
-    assert _has_figure(nb)  # the fragility curve
+    outputs = [o for c in nb.cells for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.output_type == "error"], outputs
+    return nb, "\n".join(o.get("text", "") or str(o.get("data", {}).get("text/plain", ""))
+                         for o in outputs)
 
 
 def test_own_study_notebook_runs(records_dir, tmp_path, monkeypatch):
@@ -73,7 +82,9 @@ def test_own_study_notebook_runs(records_dir, tmp_path, monkeypatch):
     for rid, path in paths.items():
         digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
         assert f"{rid}: {Path(path).name} " in joined and f"sha256 {digest}" in joined
-    assert "wtmc: 20161113_110259_WTMC_20.V2A channel S62W [mm/s2]" in joined
+    assert "wtmc: 20161113_110259_WTMC_20.V2A channel S62W [mm/s2] dt 0.02 s" in joined
     assert "s00e: elcentro_S00E_1940.dat channel - [cm/s2] dt 0.02 s" in joined
-    assert _has_figure(nb)
-    assert not list(DOCS.glob("*.nc")) and not list(DOCS.glob("*.toml"))  # nothing in docs/
+    assert any(o.output_type == "display_data" and "image/png" in o.get("data", {})
+               for c in nb.cells for o in c.get("outputs", []))  # the figure
+    docs = OWN_STUDY.parent
+    assert not list(docs.glob("*.nc")) and not list(docs.glob("*.toml"))  # nothing in docs/

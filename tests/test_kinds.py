@@ -10,11 +10,9 @@ import io
 import json
 import os
 import pickle
-import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,9 +22,9 @@ import urmx
 from urmx.catalog import CatalogError, load_study
 from urmx.errors import RunError
 from urmx.study import Lock, kinds
-from urmx.study.batches import by_walls
-from urmx.study.dataset import cell_array, grid_coords
-from urmx.study.parts import task_key
+from urmx.study.dataset import grid_coords
+
+from .fixtures.signals import killed_after_parts
 
 # ---- the toy kind: value = gain * record peak * wall height * cor, one value per cell -------
 
@@ -42,34 +40,27 @@ def toy_parse(study):
     return float(gain)
 
 
-def toy_tasks(study, records, batch_size, kernel):
-    out = []
-    for batch in by_walls(study, study.dims, batch_size):
-        task = {"heights": [study.walls[i].wall.height for i in batch.walls],
-                "diaphragm": study.diaphragms[batch.diaphragm].id, "cor": list(study.cor),
-                "gain": study.settings}
-        batch.key = task_key(task, records[study.records[batch.record]], prefix="toy-")
-        out.append((batch, task))
-    return out
+def toy_task(study, records, batch, kernel):
+    return {"heights": [study.walls[i].wall.height for i in batch.block["wall"]],
+            "cor": [study.cor[i] for i in batch.block["cor"]], "gain": study.settings,
+            "shape": batch.shape}
 
 
 def toy_run(task, acceleration):
     time.sleep(float(os.environ.get(SLEEP, "0")))
     RUNS.append(1)
     peak = float(np.max(np.abs(acceleration)))
-    return {"value": task["gain"] * peak * np.outer(task["heights"], task["cor"])}
+    value = task["gain"] * peak * np.outer(task["heights"], task["cor"])
+    return {"value": np.broadcast_to(value[:, None, None, :], task["shape"]).copy()}
 
 
-def toy_assemble(study, records, tasks, results, attrs):
-    shape = tuple(len(v) for v in study.dims.values())
-    value = cell_array(shape, [b for b, _ in tasks], results, "value",
-                       lambda v, b: v.reshape(v.shape[0], 1, 1, -1))
-    return xr.Dataset({"value": (list(study.dims), value)}, attrs=attrs,
+def toy_assemble(study, records, cells, extras, attrs):
+    return xr.Dataset({"value": (list(study.dims), cells["value"])}, attrs=attrs,
                       coords=grid_coords(study, records))
 
 
 TOY = kinds.register(kinds.Kind(name="toy", table="toy", unit="cells", outputs=("value",),
-                                parse=toy_parse, tasks=toy_tasks, run=toy_run,
+                                parse=toy_parse, task=toy_task, run=toy_run,
                                 assemble=toy_assemble))
 
 # ---- the tests -------------------------------------------------------------------------------
@@ -89,7 +80,7 @@ cor = [0.7, 0.8]
 [study.toy]
 gain = 2.0
 """
-BATCHES = 12  # 3 walls x 2 diaphragms x 2 records, one wall a batch (batch_size 1 < 2 cor)
+BATCHES = 24  # 3 walls x 2 diaphragms x 2 records x 2 cor, one cell a batch (batch_size 1)
 
 
 @pytest.fixture
@@ -162,21 +153,10 @@ with served(T.ACC, T.SCALE, T.DT):
 
 
 def test_the_toy_kind_resumes_after_its_run_is_killed(toy, tmp_path):
-    root = Path(__file__).resolve().parent.parent
     out = tmp_path / "killed.nc"
     parts = tmp_path / "killed.nc.parts"
-    env = dict(os.environ, **{SLEEP: "0.5"})
-    proc = subprocess.Popen([sys.executable, "-c", RUN, str(toy), str(out)], cwd=root,
-                            env=env, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and proc.poll() is None \
-            and len(list(parts.glob("*.npz"))) < 3:
-        time.sleep(0.02)
-    assert proc.poll() is None, proc.stderr.read().decode()
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    proc.stderr.close()
-    kept = len(list(parts.glob("*.npz")))
+    kept = killed_after_parts(["-c", RUN, str(toy), str(out)], parts, 3,
+                              dict(os.environ, **{SLEEP: "0.5"}), timeout=120)
     assert 3 <= kept < BATCHES and not out.exists()
     ds = urmx.run_study(toy, out=out, scheduler="serial", progress=False, batch_size=1)
     assert len(RUNS) == BATCHES - kept  # the killed run's batches are not run again

@@ -1,7 +1,11 @@
 """The study engine's results are those pinned before it was split into kinds (issue 23):
-batch keys byte for byte (part folders written before still resume), the archives of the
-tests' studies and of catalog and IDA studies on the real kernel, and the reports' texts
-(`tests.fixtures.pinned`, which also writes them)."""
+batch keys byte for byte, the archives of the tests' studies and of catalog and IDA studies
+on the real kernel, and the reports' texts (`tests.fixtures.pinned`, which also writes them).
+
+The batch keys were pinned again, on purpose, when cells got keys of their own (issue 29: a
+batch's key is now the hash of its cells' keys, and batches are cut over every dimension);
+part folders written before that do not resume. The archives were not pinned again: they
+are unchanged."""
 
 from __future__ import annotations
 

@@ -522,7 +522,7 @@ def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
     parts.mkdir()
     store = st.PartStore(parts, st.BATCH_OUTPUTS)
     for b, t in tasks:
-        store.save(b.key, st.run_batch(t, ACC[study.records[b.record]]))
+        store.save(b.key, st.run_batch(t, ACC[study.records[b.record]]), b.cells)
     (a, _), (b, _), (c, _) = tasks[:3]
     shutil.copy(parts / f"{a.key}.npz", parts / f"{b.key}.npz")  # another batch's part
     damaged = (parts / f"{c.key}.npz").read_bytes()
@@ -556,7 +556,8 @@ def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tm
     parts.mkdir()
     store = st.PartStore(parts, ida.OUTPUTS)
     for b, t in tasks:
-        store.save(b.key, ida.run_batch(t, records[study.records[b.record]].acceleration))
+        store.save(b.key, ida.run_batch(t, records[study.records[b.record]].acceleration),
+                   b.cells)
     with np.load(parts / f"{tasks[0][0].key}.npz") as z:
         assert str(z["batch_key"]) == tasks[0][0].key
         assert set(ida.OUTPUTS) <= set(z.files)
@@ -845,11 +846,12 @@ def test_a_full_disk_while_saving_parts_says_what_is_kept(fake_records, gaps, sm
     real_save = st.PartStore.save
     real_savez = np.savez
 
-    def save(self, key, result):
+    def save(self, key, result, *cells):
         if len(saved) == 3 and way == "tmpfs":
             fill(disk)
-        real_save(self, key, result)
+        path = real_save(self, key, result, *cells)
         saved.append(key)
+        return path
 
     def savez(file, *args, **kw):  # the 'patched' disk: full at the fourth part
         if len(saved) == 3:
@@ -891,10 +893,11 @@ def test_a_full_disk_at_the_final_write_keeps_the_parts(fake_records, gaps, smal
     reference = _run(gaps)
     real_save = st.PartStore.save
 
-    def save(self, key, result):
-        real_save(self, key, result)
+    def save(self, key, result, *cells):
+        path = real_save(self, key, result, *cells)
         if way == "tmpfs" and self.count() == 6:
             fill(disk)
+        return path
 
     def to_netcdf(self, path, *args, **kw):  # what netCDF4 raises when HDF5 fails
         Path(path).write_bytes(b"\x89HDF\r\n")
@@ -1067,7 +1070,7 @@ def test_a_part_being_written_is_never_counted_as_a_part(tmp_path, monkeypatch):
         real(src, dst)
 
     monkeypatch.setattr(os, "replace", spy)
-    store.save("k1", {"a": np.arange(3.0)})
+    store.save("k1", {"a": np.arange(3.0)}, np.arange(3, dtype=np.uint64))
     assert seen == [(f".k1.{os.getpid()}.npz.tmp", [])]
     assert store.count() == 1 and sorted(p.name for p in tmp_path.iterdir()) == ["k1.npz"]
     assert np.array_equal(store.load("k1")["a"], np.arange(3.0))

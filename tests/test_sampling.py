@@ -12,10 +12,10 @@ import json
 import math
 import os
 import pickle
-import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +37,8 @@ from urmx.uncertainty import (
     unit_design,
     variance_split,
 )
+
+from .fixtures.signals import killed_after_parts
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -261,7 +263,7 @@ def _bitwise(a: xr.Dataset, b: xr.Dataset) -> None:
     xr.testing.assert_identical(_no_history(a), _no_history(b))
     for name in a.variables:
         x, y = a[name].values, b[name].values
-        if x.dtype == object:
+        if x.dtype.kind in "OUS" or y.dtype.kind in "OUS":  # strings: by value
             assert x.tolist() == y.tolist(), name
         else:
             assert x.tobytes() == y.tobytes(), name
@@ -316,37 +318,81 @@ with served(T.ACC, T.SCALE, T.DT):
 """
 
 
-def test_a_killed_sampling_study_resumes_to_the_same_archive_bit_for_bit(sampled, tmp_path):
-    """SIGKILL a real `run_study` subprocess after a few batches; the run again resumes
-    from its parts (computing only the others) and writes bitwise the archive of an
-    uninterrupted run."""
-    out, parts = tmp_path / "killed.nc", tmp_path / "killed.nc.parts"
-    total = 2 * 2 * 2 * 5  # cells, one a batch at batch_size 1
-    env = dict(os.environ, **{SLEEP: "0.3"})
-    proc = subprocess.Popen([sys.executable, "-c", RUN, str(sampled), str(out)], cwd=ROOT,
-                            env=env, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 180
-    while time.monotonic() < deadline and proc.poll() is None \
-            and len(list(parts.glob("*.npz"))) < 3:
-        time.sleep(0.02)
-    assert proc.poll() is None, proc.stderr.read().decode()
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    proc.stderr.close()
-    kept = len(list(parts.glob("*.npz")))
-    assert 3 <= kept < total and not out.exists()
-    calls = []
-
+def _counting(calls: list) -> Callable:
+    """`slow_kernel`, counting its analyses in `calls` (under slow_kernel's name: the same
+    cell keys)."""
     def counted(*args, **kw):
         calls.append(1)
         return slow_kernel(*args, **kw)
 
-    counted.__module__, counted.__qualname__ = __name__, "slow_kernel"  # the same key
-    ds = urmx.run_study(sampled, out=out, scheduler="serial", progress=False, batch_size=1,
-                        kernel=counted)
+    counted.__module__, counted.__qualname__ = __name__, "slow_kernel"
+    return counted
+
+
+def test_a_killed_sampling_study_resumes_to_the_same_archive_bit_for_bit(sampled, tmp_path):
+    """SIGKILL a real `run_study` subprocess after a few batches; the run again, with
+    another batch size, resumes from its parts (computing only the other cells) and writes
+    bitwise the archive of an uninterrupted run."""
+    out, parts = tmp_path / "killed.nc", tmp_path / "killed.nc.parts"
+    total = 2 * 2 * 2 * 5  # cells, one a batch at batch_size 1
+    kept = killed_after_parts(["-c", RUN, str(sampled), str(out)], parts, 3,
+                              env=dict(os.environ, **{SLEEP: "0.3"}))
+    assert 3 <= kept < total and not out.exists()
+    calls: list = []
+    ds = urmx.run_study(sampled, out=out, scheduler="serial", progress=False, batch_size=3,
+                        kernel=_counting(calls))
     assert len(calls) == total - kept and not parts.exists()
     _bitwise(ds, urmx.run_study(sampled, scheduler="serial", progress=False, batch_size=1,
                                 kernel=slow_kernel))
+
+
+@pytest.mark.parametrize("method,extra", [("sobol", ""), ("random", ""), ("sobol", IDA)])
+def test_a_design_extended_by_more_samples_computes_only_the_new_ones(make_study,
+                                                                        use_records, tmp_path,
+                                                                        method, extra):
+    """A cell is keyed by its sample's values (not its index or the design): a ``sobol`` or
+    ``random`` design of the same seed with twice the samples keeps its first points, so
+    the run into the same archive takes their cells from it, computes only the new
+    samples', and writes bitwise what a fresh run of the larger design writes; the batches
+    are cut over the sample dimension."""
+    from urmx.study import engine
+
+    use_records(ACC, SCALE, DT)
+    calls: list = []
+    counted = _counting(calls)
+
+    def study(n):
+        return make_study(STUDY.replace("samples = 5\nseed = 3", f"samples = {n}\nseed = 3\n"
+                                        f'method = "{method}"') + extra, f"{method}.toml")
+
+    out = tmp_path / "ext.nc"
+    first = urmx.run_study(study(4), out=out, scheduler="serial", progress=False,
+                           batch_size=3, kernel=counted).load()
+    analyses = len(calls)
+    assert analyses == 2 * 2 * 2 * 4 or extra
+    from urmx.records import Record
+
+    recs = {k: Record(k, ACC[k], DT) for k in ACC}
+    blocks = [b.block for b, _ in urmx.study.batch_tasks(load_study(study(8)), recs, 3)]
+    assert {len(b["sample"]) for b in blocks} == {3, 2} and len(blocks) == 2 * 2 * 2 * 3
+    assert sorted(j for b in blocks if b["wall"] == [0] and b["diaphragm"] == [1]
+                  and b["record"] == [1] for j in b["sample"]) == list(range(8))
+    calls.clear()
+    ds = urmx.run_study(study(8), out=out, scheduler="serial", progress=False, batch_size=3,
+                        kernel=counted).load()
+    run = engine.last_run()
+    assert (run.from_archive, run.computed) == (32, 32)
+    old = ds.isel(sample=slice(0, 4), intensity_step=slice(0, first.sizes.get(
+        "intensity_step", 0))) if extra else ds.isel(sample=slice(0, 4))
+    for name in [n for n in first.data_vars if "sample" in first[n].dims]:
+        assert np.asarray(first[name].values).tobytes() == np.asarray(
+            old[name].values).tobytes(), name
+    new = len(calls)
+    assert new == 32 or extra
+    calls.clear()
+    _bitwise(ds, urmx.run_study(
+        study(8), scheduler="serial", progress=False, batch_size=3, kernel=counted))
+    assert len(calls) == analyses + new  # a fresh run computes the reused cells too
 
 
 def test_an_ida_sampling_study_fits_records_and_samples_together(make_study, use_records):
@@ -359,7 +405,7 @@ def test_an_ida_sampling_study_fits_records_and_samples_together(make_study, use
     use_records(ACC, SCALE, DT)
     path = make_study(STUDY.replace("samples = 5", "samples = 4") + IDA, "ida.toml")
     study = load_study(path)
-    assert study.kind == "sampling" and study.settings.ida.rtol == 0.02
+    assert study.kind == "sampling-ida" and study.settings.ida.rtol == 0.02
     ds = urmx.run_study(path, scheduler="serial", progress=False)
     cap = ds.collapse_intensity
     assert cap.dims == ("wall", "diaphragm", "record", "sample") and ds.sample.size == 4
@@ -388,8 +434,8 @@ def test_an_ida_sampling_study_fits_records_and_samples_together(make_study, use
     assert np.all(np.isfinite(ds.predominant_frequency.values))
     from urmx.study import kinds, summary
 
-    assert summary.kind_of(ds) == "sampling"
-    assert kinds.get("sampling").counts(ds) == {"collapsed": int((ds.censored == 0).sum()),
+    assert summary.kind_of(ds) == "sampling-ida"
+    assert kinds.get("sampling-ida").counts(ds) == {"collapsed": int((ds.censored == 0).sum()),
                                                 "censored": int(ds.censored.sum()),
                                                 "missing": 0}
 
@@ -426,7 +472,7 @@ def test_a_sampling_batch_imports_numpy_only(make_study, use_records, tmp_path, 
 
 def test_the_catalog_sampling_study_loads():
     study = load_study("uncertainty-ida")
-    assert study.kind == "sampling" and study.settings.ida is not None
+    assert study.kind == "sampling-ida" and study.settings.ida is not None
     assert study.settings.sampling.parameters["cor"].args == (0.78, 0.83)
     assert set(study.settings.values["impact"]) == {"scale", "contact"}
     assert len(study.records) == 40

@@ -28,7 +28,8 @@ def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     curves, compressed), strings as they are. Integer and flag outputs held as float with
     NaN (study cells without a valid result, `urmx.variables.INTEGER_OUTPUTS`) are stored
     as int32 with the CF ``_FillValue`` `INT_FILL`, which xarray masks on reading (float64
-    with NaN)."""
+    with NaN). A ``chunksizes`` in a variable's own encoding is kept (the slabs a study
+    archive is written in, `urmx.study.sources`)."""
     from .variables import INTEGER_OUTPUTS
 
     enc: dict[str, dict[str, Any]] = {}
@@ -46,6 +47,8 @@ def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": None}
         else:
             enc[name] = {"zlib": True, "complevel": 4, "_FillValue": np.nan}
+        if "chunksizes" in var.encoding and enc[name].get("zlib"):  # a study's slabs
+            enc[name]["chunksizes"] = var.encoding["chunksizes"]
     return enc
 
 

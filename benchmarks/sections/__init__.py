@@ -24,6 +24,7 @@ from . import (
     kernel,
     opensees,
     paper,
+    scale,
     startup,
     statuses,
     uncertainty,
@@ -31,7 +32,7 @@ from . import (
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility, statuses, startup, opensees, uncertainty]
+            fragility, statuses, startup, opensees, uncertainty, scale]
 
 #: names on the command line that run several sections
 GROUPS = {

@@ -42,17 +42,50 @@ def _batch_size(text: str) -> int:
 
 def study_options(p) -> None:
     """The options every study-running command takes (scheduler, records, batch size,
-    quiet)."""
+    quiet, force and the size limits)."""
     p.add_argument("--scheduler", default=None,
                    help='dask scheduler address (tcp://host:8786), "threads", "processes" or '
                         '"serial"; default: local worker processes, one per core')
     p.add_argument("--records", default=None, help="records folder (default $URMX_RECORDS)")
     p.add_argument("--batch-size", type=_batch_size, default=16,
-                   help="analyses per batch, >= 1 (default 16)")
+                   help="cells (analyses for a grid) per batch, >= 1 (default 16); batches "
+                        "are cut over every dimension, and a resumed run finds finished "
+                        "cells whatever the batch size was")
     p.add_argument("--worker-timeout", type=_seconds, default=None, metavar="SECONDS",
                    help="on a cluster, stop the run when no worker has been left for this "
                         "long (default 60; dask config urmx.worker-timeout)")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    _size_options(p)
+
+
+def _limit(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be above 0")
+    return value
+
+
+def _size_options(p) -> None:
+    """--force, --max-cells, --max-gb (`urmx.study.engine`, `urmx.study.limits`)."""
+    from ..study.limits import MAX_CELLS, MAX_GB
+
+    p.add_argument("--force", action="store_true",
+                   help="replace an --out archive that holds another study (or no urmx "
+                        "study), discarding that study's finished parts in FILE.nc.parts/")
+    p.add_argument("--max-cells", type=_limit, default=MAX_CELLS, metavar="N",
+                   help=f"refuse, before any work, a study of more cells (default "
+                        f"{MAX_CELLS:.0e})")
+    p.add_argument("--max-gb", type=_limit, default=MAX_GB, metavar="G",
+                   help=f"refuse, before any work, a study whose archive would pass G GB "
+                        f"uncompressed (default {MAX_GB:g})")
+
+
+def size_arguments(args) -> dict:
+    """The run_study keywords of `_size_options`."""
+    return dict(force=args.force, max_cells=args.max_cells, max_gb=args.max_gb)
 
 
 def _seconds(text: str) -> float:
@@ -120,7 +153,8 @@ def run_loaded(args, study) -> int:
     apply_settings(args)
     run_resumable(args, Path(args.out), lambda: run_study(
         study, out=args.out, scheduler=args.scheduler, progress=not args.quiet,
-        batch_size=args.batch_size, records_dir=args.records, command=command_line()))
+        batch_size=args.batch_size, records_dir=args.records, command=command_line(),
+        **size_arguments(args)))
     print(args.out)
     return 0
 
@@ -149,7 +183,7 @@ def _paper(args) -> int:
             run_resumable(args, path, lambda name=name, path=path: run_study(
                 name, out=path, scheduler=client if client else "serial",
                 progress=not args.quiet, batch_size=args.batch_size,
-                records_dir=args.records, command=command_line()))
+                records_dir=args.records, command=command_line(), **size_arguments(args)))
             archives.append(path)
     finally:
         if owned:

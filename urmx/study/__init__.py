@@ -9,9 +9,14 @@ names. The kind-blind engine runs them all:
 
 - `urmx.study.engine`: :func:`run_study`, :func:`run_grid`, :func:`batch_tasks`, the compute
   loop (:func:`compute`);
-- `urmx.study.batches`: :class:`Batch`, the blocks of cells work is cut into;
-- `urmx.study.parts`: batch keys (:func:`task_key`), the part store of resumable archives
-  (:class:`PartStore`) and the lock (:class:`Lock`);
+- `urmx.study.limits`: a study's size before it runs (:func:`size_of`, :func:`check_size`,
+  :data:`MAX_CELLS`, :data:`MAX_GB`) and what one dimension may hold (:data:`MAX_VALUES`);
+- `urmx.study.cells`: the cells of a study and their identities (:class:`Cells`);
+- `urmx.study.batches`: :class:`Batch`, the blocks of cells work is cut into (:class:`Cut`);
+- `urmx.study.parts`: the part store of resumable archives (:class:`PartStore`) and the
+  lock (:class:`Lock`);
+- `urmx.study.sources`: where each cell's result lies, cells taken over from an earlier
+  archive, and the gathering of results into the study's arrays;
 - `urmx.study.clients`: dask clients (:func:`local_client`, :func:`close_client`,
   :func:`get_client`, :func:`check_scheduler`);
 - `urmx.study.progress`: :class:`Progress` on stderr;
@@ -21,8 +26,7 @@ names. The kind-blind engine runs them all:
 - `urmx.study.summary`: :func:`info` (what an archive holds and how it was made) and
   :func:`diff` (what differs between two archives), ``urmx info`` and ``urmx diff``;
 - `urmx.study.samples`: :func:`resolve_records`, a study's records (manifest ids and the
-  study file's own record files) as `urmx.records.Record`, with their provenance;
-- `urmx.study.limits`: what a study may hold (``MAX_VALUES`` values a dimension).
+  study file's own record files) as `urmx.records.Record`, with their provenance.
 
 The names are loaded on first use so that `urmx.catalog` can reach the kinds (to parse a
 study's ``[study.<kind>]`` table) without importing the engine, which imports the catalog.
@@ -34,8 +38,12 @@ import importlib
 
 _PUBLIC = {
     "run_study": "engine", "run_grid": "engine", "batch_tasks": "engine", "compute": "engine",
-    "Batch": "batches",
-    "task_key": "parts", "PartStore": "parts", "Lock": "parts",
+    "last_run": "engine", "RunStats": "engine",
+    "size_of": "limits", "check_size": "limits", "SizeError": "limits",
+    "MAX_CELLS": "limits", "MAX_GB": "limits", "MAX_VALUES": "limits",
+    "Cells": "cells",
+    "Batch": "batches", "Cut": "batches",
+    "PartStore": "parts", "Lock": "parts",
     "check_scheduler": "clients", "local_client": "clients", "get_client": "clients",
     "close_client": "clients",
     "Progress": "progress",
@@ -46,8 +54,8 @@ _PUBLIC = {
     "resolve_records": "samples", "RecordData": "samples",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
-_SUBMODULES = ("engine", "batches", "parts", "clients", "progress", "dataset", "archive",
-               "samples", "kinds", "summary", "limits")
+_SUBMODULES = ("engine", "limits", "cells", "batches", "parts", "sources", "clients",
+               "progress", "dataset", "archive", "samples", "kinds", "summary")
 __all__ = sorted(_PUBLIC)
 
 

@@ -2,41 +2,40 @@
 
 A batch covers, for every dimension of its kind's cells, a list of indices (a block of the
 grid), within one record: the record's samples travel to the worker once per record, not
-once per batch. :func:`by_walls` cuts the way every kind here does: one record and one
-diaphragm a batch, the record's walls grouped so that a batch holds about ``batch_size``
-cells, over every value of the other dimensions.
+once per batch. :func:`cut` cuts the cells the way every kind runs, over every dimension
+(wall, diaphragm, record, cor, scale, impact, damping and the kind's own): records
+outermost; within a record, the walls the study pairs with it and every other dimension
+are cut into blocks of about ``batch_size`` cells, the innermost dimensions taken whole
+while they fit and the next one cut into even pieces. Only the cells still to run are cut:
+a block holding finished cells (found per cell, `urmx.study.cells`) is halved along its
+longest side until every block is all to run, so a resumed run computes no finished cell
+whatever the batches of the run before were.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
-#: the dimensions a batch is cut along by :func:`by_walls`; it covers every value of the others
-CUT = ("wall", "diaphragm", "record")
 
 
 @dataclass
 class Batch:
     """A block of cells: for each dimension of the kind's cells (in their order), the indices
-    the batch covers; and its key (`urmx.study.parts.task_key`), set with its task."""
+    the batch covers; its cells' keys (`urmx.study.cells.Cells.keys`, block shape) and its
+    key (a hash of those, `urmx.study.parts.batch_key`), set when it is made."""
 
     block: dict[str, list[int]]
     key: str = ""
+    cells: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def record(self) -> int:
         """Index of the batch's one record."""
         (index,) = self.block["record"]
-        return index
-
-    @property
-    def diaphragm(self) -> int:
-        """Index of the batch's one diaphragm."""
-        (index,) = self.block["diaphragm"]
         return index
 
     @property
@@ -60,28 +59,106 @@ class Batch:
         return np.ix_(*self.block.values()) + trailing
 
 
-def by_walls(study: Any, dims: dict[str, list], batch_size: int) -> list[Batch]:
-    """Batches of one record and one diaphragm, the walls the study pairs with the record
-    grouped by ``max(1, batch_size // n)`` (``n`` the cells of one wall: the product of the
-    sizes of the dimensions not in `CUT`), records outermost, then diaphragms.
+def extents(shape: tuple[int, ...], batch_size: int) -> tuple[int, ...]:
+    """Block lengths over a grid of `shape` for about `batch_size` cells a block: the
+    innermost dimensions whole while they fit, the next cut into even pieces, the outer
+    ones one index."""
+    out = [1] * len(shape)
+    room = max(1, int(batch_size))
+    for axis in range(len(shape) - 1, -1, -1):
+        n = shape[axis]
+        if n <= room:
+            out[axis] = n
+            room //= n
+            continue
+        pieces = math.ceil(n / room)
+        out[axis] = math.ceil(n / pieces)
+        break
+    return tuple(out)
+
+
+def _starts(n: int, length: int) -> np.ndarray:
+    return np.arange(0, n, length)
+
+
+def _counts(todo: np.ndarray, lengths: tuple[int, ...]) -> np.ndarray:
+    """Cells to run in each block of a sub-grid cut into blocks of `lengths`."""
+    counts = todo.astype(np.int64)
+    for axis, length in enumerate(lengths):
+        counts = np.add.reduceat(counts, _starts(todo.shape[axis], length), axis=axis)
+    return counts
+
+
+def _split(ranges: list[range], todo: np.ndarray) -> Iterator[list[range]]:
+    """The blocks of all-to-run cells in a block (`todo` its cells' flags): the block, or
+    its halves along the longest side, recursively."""
+    if todo.all():
+        yield ranges
+        return
+    if not todo.any():
+        return
+    axis = int(np.argmax(todo.shape))
+    half = todo.shape[axis] // 2
+    r = ranges[axis]
+    for part, sub in ((range(r.start, r.start + half), np.take(todo, range(half), axis)),
+                      (range(r.start + half, r.stop),
+                       np.take(todo, range(half, todo.shape[axis]), axis))):
+        yield from _split([*ranges[:axis], part, *ranges[axis + 1:]], sub)
+
+
+class Cut:
+    """The cells still to run of a study, cut into batches (module docstring).
 
     Parameters
     ----------
-    study : urmx.catalog.Study
-        The study (its walls, diaphragms, records and pairs).
-    dims : dict
-        The kind's cell dimensions and their values, in order; they include `CUT`.
+    cells : urmx.study.cells.Cells
+        The study's cells.
     batch_size : int
         Target number of cells a batch. [1]
+    done : ndarray of bool, optional
+        Flat over the grid: cells already finished (default none).
     """
-    inner = math.prod(len(v) for k, v in dims.items() if k not in CUT)
-    per = max(1, batch_size // inner)
-    every = {k: list(range(len(v))) for k, v in dims.items() if k not in CUT}
-    out = []
-    for ir, rid in enumerate(study.records):
-        walls = [iw for iw, w in enumerate(study.walls) if study.paired(w.id, rid)]
-        for idp in range(len(study.diaphragms)):
-            for i in range(0, len(walls), per):
-                block = {"wall": walls[i:i + per], "diaphragm": [idp], "record": [ir], **every}
-                out.append(Batch({k: block[k] for k in dims}))
-    return out
+
+    def __init__(self, cells: Any, batch_size: int, done: np.ndarray | None = None):
+        self.cells, self.batch_size, self.done = cells, batch_size, done
+
+    def _records(self) -> Iterator[tuple[list[np.ndarray], np.ndarray, tuple[int, ...]]]:
+        """Per record with cells to run: (index arrays of its sub-grid per dimension, its
+        to-run flags, block lengths)."""
+        c = self.cells
+        pairs = c.runnable()
+        iw = c.names.index("wall")
+        for r in range(c.shape[c.record_axis]):
+            walls = np.flatnonzero(pairs[:, r])
+            if not len(walls):
+                continue
+            axes = [np.arange(n) for n in c.shape]
+            axes[iw], axes[c.record_axis] = walls, np.array([r])
+            shape = tuple(len(a) for a in axes)
+            if self.done is None:
+                todo = np.ones(shape, dtype=bool)
+            else:
+                todo = ~self.done[c.flat(axes).ravel()].reshape(shape)
+            yield axes, todo, extents(shape, self.batch_size)
+
+    def counts(self) -> tuple[int, int]:
+        """(blocks of the regular cut that hold nothing to run, all its blocks)."""
+        finished = total = 0
+        for _, todo, lengths in self._records():
+            counts = _counts(todo, lengths)
+            total += counts.size
+            finished += int((counts == 0).sum())
+        return finished, total
+
+    def __iter__(self) -> Iterator[Batch]:
+        """The batches, in order; each block holds only cells to run."""
+        names = self.cells.names
+        for axes, todo, lengths in self._records():
+            counts = _counts(todo, lengths)
+            for at in zip(*np.nonzero(counts), strict=True):
+                ranges = [range(i * n, min(len(a), (i + 1) * n))
+                          for i, n, a in zip(at, lengths, axes, strict=True)]
+                sub = todo[tuple(slice(r.start, r.stop) for r in ranges)]
+                for part in _split(ranges, sub):
+                    yield Batch({k: axes[d][r.start:r.stop].tolist()
+                                 for d, (k, r) in enumerate(zip(names, part, strict=True))})

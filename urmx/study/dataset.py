@@ -1,6 +1,7 @@
 """What every study kind's Dataset shares: the one status vocabulary, the coordinates of the
-wall, diaphragm, record and cor dimensions with the items' properties, the global
-attributes, and placing each batch's block of results into the study's arrays.
+wall, diaphragm, record and cor dimensions with the items' properties, and the global
+attributes (each cell's results are placed in the study's arrays by
+`urmx.study.sources`).
 
 xarray is imported only by the functions that build its objects, so a worker that runs a
 batch (numpy only) can use the vocabulary without it.
@@ -52,28 +53,6 @@ def coord(name: str, dims: Any, values: Any) -> xr.Variable:
     import xarray as xr
 
     return xr.Variable(dims, values, attrs=variables.attrs(name))
-
-
-def cell_array(shape: tuple[int, ...], batches: list, results: dict, name: str,
-               block: Any = None, fill: float = np.nan, dtype: Any = np.float64
-               ) -> np.ndarray:
-    """An array of `shape` over a kind's cell dimensions (then any per-cell axes), `fill`
-    where no batch wrote, each batch's result `name` placed at its block.
-
-    Parameters
-    ----------
-    block : callable, optional
-        ``block(values, batch) -> array`` of the batch's block shape (then any per-cell
-        axes): how a kind's result array maps onto the block (default: as it is). Per-cell
-        axes shorter than the study's are padded with `fill`.
-    """
-    out = np.full(shape, fill, dtype=dtype)
-    for batch in batches:
-        values = np.asarray(results[batch.key][name])
-        values = block(values, batch) if block is not None else values
-        trailing = tuple(slice(0, n) for n in values.shape[len(batch.block):])
-        out[batch.index(*trailing)] = values
-    return out
 
 
 def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any]:

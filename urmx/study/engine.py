@@ -1,20 +1,42 @@
-"""The study engine: a study file -> its kind's batches on dask -> one labelled Dataset -> a
-netCDF archive, resumable, for any registered study kind (`urmx.study.kinds`), which it
-never asks the name of.
+"""The study engine: a study file -> its kind's cells, cut into batches on dask -> one
+labelled Dataset -> a netCDF archive, resumable and reusing finished cells, for any
+registered study kind (`urmx.study.kinds`), which it never asks the name of.
 
-The engine resolves the study's records, asks the study's kind for its batches
-(:func:`batch_tasks`), loads what an archive's parts folder already holds, computes the
-rest (:func:`compute`: in this process or on a dask cluster, saving each batch as it
-arrives), and hands every result to the kind to assemble.
+How a run goes (:func:`run_study`):
 
-Resumable archives: with ``out=FILE.nc`` every finished batch is saved at once in the
-sidecar folder ``FILE.nc.parts/`` under its key (`urmx.study.parts`). A run that is stopped
-(Ctrl-C, a killed worker, a full disk) keeps those files; run it again and only the missing
-batches are computed. One run at a time holds the folder (an OS file lock); a second run on
-the same archive stops with a clear error. The archive is written to a temporary name and
-renamed, and the sidecar folder is removed after that. The archive's ``history`` carries
-the time the run was first started, so a resumed run writes the same archive as an
-uninterrupted one.
+1. **Size.** The study's cells and its archive's bytes are computed from the sizes of its
+   dimensions (`urmx.study.limits`); above the run's limits (``max_cells``, ``max_gb``) it
+   stops before any work, with the size and the way on.
+2. **Whose archive.** An existing ``out`` holding another study (its ``study_name``), or no
+   urmx study, is never overwritten without ``force=True``; a parts folder holding another
+   study's finished parts is never emptied without it (the message names both studies).
+3. **Cells and their keys.** Each cell of the kind's grid has a key, a hash of everything
+   that decides its result (`urmx.study.cells`: the wall's parameters, the diaphragm, the
+   record's samples and scale factor, the values of every other dimension, the kind's
+   settings, the kernel's name and source hash, the urmx version).
+4. **Finished cells found per cell.** The parts folder ``FILE.nc.parts/`` holds each
+   finished batch with its cells' keys (`urmx.study.parts`); an earlier archive of the same
+   study holds its cells' keys as the variable ``cell_key`` (over the kind's dimensions; 0
+   where the study ran no cell). Every cell whose key is found is taken, from the parts or
+   from the archive (copied into parts first, `urmx.study.sources.take_over`), whatever
+   batches made it: a resumed run with another ``batch_size``, or a study extended by a
+   record, a wall or a cor value, computes only the cells not found. A record file whose
+   samples changed has another digest, hence other keys: its cells are computed again.
+   Cells whose kind keeps extra arrays for them (a grid's time histories) are taken from
+   parts only.
+5. **Batches.** The cells still to run are cut over every dimension into blocks of about
+   ``batch_size`` cells, one record each (`urmx.study.batches.Cut`); a kind's ``task``
+   makes each block's task and its ``run`` computes it on a worker. Batches are handed to
+   dask `WINDOW` at a time (the scheduler and the workers hold no more), and each result is
+   saved as a part at once and dropped: the main process keeps two int32 per cell
+   (`urmx.study.sources.Sources`), not the results.
+6. **Assembly.** The kind builds its Dataset from the per-cell arrays (`Kind.assemble`);
+   with an archive these are dask arrays gathered from the parts slab by slab, so the
+   archive is written (through `urmx.netcdf.write_netcdf`, under a temporary name, then
+   renamed) without holding the results; then the parts folder is removed and the archive
+   reopened lazily. The archive's ``history`` carries the time the run was first started.
+
+Counts of the last run (cells found in parts, taken from the archive, computed): :func:`last_run`.
 
 Schedulers (`urmx.study.clients`): the client already active in the process is used, a
 small study runs in this process (:func:`compute`); on a cluster, every worker must run
@@ -27,18 +49,22 @@ Outputs: the archive path is resolved and checked (a test file written in its fo
 input file of the run) before any work (`urmx.errors.check_output`); a failure to write
 a part or the archive says how many finished batches are kept.
 
-:func:`run_study` reads a study file, resolves its records and writes the archive;
+Schedulers (`urmx.study.clients`): a worker lost mid-run is survived: dask reruns its
+batches, and the record samples are tasks it can recompute, not scattered data.
+
 :func:`run_grid` runs a study built in code on records given in memory, with no archive
-(benchmarks).
+(benchmarks); :func:`batch_tasks` lists a study's batches and tasks.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import itertools
 import os
 import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -49,7 +75,8 @@ from ..errors import InputError, OutputError, RunError, check_output
 from ..netcdf import write_netcdf
 from ..provenance import differs
 from . import kinds
-from .batches import Batch
+from .batches import Batch, Cut
+from .cells import Cells
 from .clients import (
     Watch,
     active_client,
@@ -67,17 +94,65 @@ from .clients import (
     worker_timeout,
 )
 from .dataset import global_attrs
-from .parts import Lock, PartStore
+from .limits import MAX_CELLS, MAX_GB, check_size
+from .parts import Lock, PartStore, batch_key
 from .progress import Progress
 from .samples import resolve_records
+from .sources import Sources, take_over
 
 if TYPE_CHECKING:
     import xarray as xr
 
+#: batches handed to dask at once (more when the cluster has more than WINDOW / 32 workers,
+#: fewer when they hold more than WINDOW_CELLS cells in all)
+WINDOW = 256
+WINDOW_CELLS = 2 ** 18
+#: bytes of netCDF chunk cache per variable while an archive is written: none, as each slab is
+#: one whole chunk written once (a 2 MiB cache per variable held 29 MB more while a
+#: 399,600-analysis archive was written)
+CHUNK_CACHE = 0
+MESSAGE_LOG = 16  # batches of messages a local cluster's connections keep (distributed: 1000)
+
+
+@dataclass
+class RunStats:
+    """What a run found and computed, in cells of its kind (`unit`).
+
+    ``runs`` cells of the study are run (its pairs leave the others out): ``from_parts``
+    were found in the parts folder, ``from_archive`` taken from the earlier archive, and
+    ``computed`` computed now in ``batches`` batches; ``rejected`` part files were damaged
+    or foreign.
+    """
+
+    study: str
+    unit: str
+    runs: int
+    from_parts: int = 0
+    from_archive: int = 0
+    computed: int = 0
+    batches: int = 0
+    rejected: int = 0
+
+
+_LAST: list[RunStats] = []
+
+
+def last_run() -> RunStats | None:
+    """The counts of the last study run in this process (None before any)."""
+    return _LAST[-1] if _LAST else None
+
+
+def _made(cells: Cells, batch: Batch, records: dict, kernel: Callable | None
+          ) -> tuple[Batch, dict[str, Any]]:
+    """A batch with its cells' keys, its key and its task (the kind's ``task``)."""
+    batch.cells = cells.keys(list(batch.block.values()))
+    batch.key = batch_key(f"{cells.kind.name}-", batch.cells)
+    return batch, cells.kind.task(cells.study, records, batch, kernel)
+
 
 def batch_tasks(study: Study, records: dict, batch_size: int = 16,
                 kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
-    """The batches of a study, each with the task a worker runs (its kind's ``run``).
+    """Every batch of a study (none found finished), each with the task a worker runs.
 
     Parameters
     ----------
@@ -93,10 +168,11 @@ def batch_tasks(study: Study, records: dict, batch_size: int = 16,
     Returns
     -------
     list of (Batch, dict)
-        Each batch (its ``key`` set to a hash of everything that decides its result) and
-        its task: plain Python and numpy values, picklable, no xarray.
+        Each batch (its ``cells`` keys and its ``key`` set) and its task: plain Python and
+        numpy values, picklable, no xarray.
     """
-    return kinds.get(study.kind).tasks(study, records, batch_size, kernel)
+    cells = Cells(study, kinds.get(study.kind), records, kernel)
+    return [_made(cells, b, records, kernel) for b in Cut(cells, batch_size)]
 
 
 def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
@@ -114,33 +190,49 @@ def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
     scheduler gone, or no worker for ``urmx.worker-timeout`` seconds, is a
     `urmx.errors.RunError`), and a worker lost mid-run is survived: dask runs its batches
     again elsewhere (up to its ``allowed-failures``), and the record samples are tasks it
-    can recompute.
+    can recompute. Batches go to dask a window at a time (:func:`_window`), so the
+    scheduler, the workers and this process hold few of them at once.
     """
+    _compute_all(iter(tasks), sum(b.size for b, _ in tasks), records, rec_ids, scheduler,
+                 on_result, runner)
+
+
+def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str],
+                 scheduler: Any, on_result: Callable, runner: Callable) -> None:
+    """:func:`compute` over batches made as they are needed (`total`: their cells)."""
     check_scheduler(scheduler)
     if scheduler == "serial":
-        tasks = _here(tasks, records, rec_ids, on_result, runner)
-    elif scheduler is None and active_client() is None:
-        tasks = _in_process(tasks, records, rec_ids, on_result, runner)
-    if not tasks:
+        _here(batches, records, rec_ids, on_result, runner)
         return
-    client, owned = get_client(scheduler)
-    pending: dict = {}
+    if scheduler is None and active_client() is None:
+        batches = _in_process(batches, total, records, rec_ids, on_result, runner)
+    first = list(itertools.islice(batches, 1))
+    if not first:
+        return
+    client, owned = _client(scheduler)
     with quiet_client():
         try:
             watch = Watch(client, worker_timeout())
             check_workers(client, watch.timeout)
-            _submit(client, tasks, records, rec_ids, runner, pending)
-            _gather(pending, on_result, watch)
+            for chunk in _windows(itertools.chain(first, batches), _window(client, first)):
+                pending: dict = {}
+                try:
+                    _submit(client, chunk, records, rec_ids, runner, pending)
+                    _gather(pending, on_result, watch)
+                finally:
+                    if pending and not owned:
+                        release(client, False, [f for f, _ in pending.values()])
         finally:
-            release(client, owned, [f for f, _ in pending.values()])
+            if owned:
+                release(client, True, [])
 
 
-def _here(tasks: list, records: dict, rec_ids: list[str], on_result: Callable,
-          runner: Callable) -> list:
-    """Run `tasks` in this process; nothing is left."""
+def _here(tasks: Iterable, records: dict, rec_ids: list[str], on_result: Callable,
+          runner: Callable) -> Iterator:
+    """Run `tasks` in this process, one at a time; nothing is left."""
     for batch, task in tasks:
         on_result(batch, runner(task, records[rec_ids[batch.record]].acceleration))
-    return []
+    return iter(())
 
 
 def serial_estimate(seconds: float, size: int, total: int) -> float:
@@ -149,28 +241,29 @@ def serial_estimate(seconds: float, size: int, total: int) -> float:
     return seconds * total / max(size, 1)
 
 
-def _in_process(tasks: list, records: dict, rec_ids: list[str], on_result: Callable,
-                runner: Callable) -> list:
+def _in_process(tasks: Iterator, total: int, records: dict, rec_ids: list[str],
+                on_result: Callable, runner: Callable) -> Iterator:
     """Run a small study in this process and return the batches left for a cluster.
 
     The rule: a study of one batch runs here. Otherwise the kernel is loaded and the
-    first batch runs here, timed; when that time per cell times the study's cells
-    (:func:`serial_estimate`) is below ``urmx.serial-below`` seconds (dask config,
+    first batch runs here, timed; when that time per cell times the `total` cells to
+    compute (:func:`serial_estimate`) is below ``urmx.serial-below`` seconds (dask config,
     default 10: less than starting a local cluster and sharing the work would save), the
     other batches run here too; else they go to a local cluster.
     """
-    if len(tasks) <= 1:
-        return _here(tasks, records, rec_ids, on_result, runner)
+    first = list(itertools.islice(tasks, 2))
+    if len(first) <= 1:
+        return _here(first, records, rec_ids, on_result, runner)
     from ..kernel import warm_up
 
     warm_up()  # loading (or compiling) the kernel is not the study's cost
     start = time.perf_counter()
-    _here(tasks[:1], records, rec_ids, on_result, runner)
-    estimate = serial_estimate(time.perf_counter() - start, tasks[0][0].size,
-                               sum(b.size for b, _ in tasks))
+    _here(first[:1], records, rec_ids, on_result, runner)
+    estimate = serial_estimate(time.perf_counter() - start, first[0][0].size, total)
+    rest = itertools.chain(first[1:], tasks)
     if estimate < setting("serial-below"):
-        return _here(tasks[1:], records, rec_ids, on_result, runner)
-    return tasks[1:]
+        return _here(rest, records, rec_ids, on_result, runner)
+    return rest
 
 
 def _submit(client: Any, tasks: list, records: dict, rec_ids: list[str],
@@ -238,47 +331,167 @@ def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
 
 
-def _run(study: Study, records: dict, tasks: list[tuple[Batch, dict]], parts: Path | None,
-         scheduler: Any, progress: bool, command: str | None) -> xr.Dataset:
-    """Load what `parts` holds, compute the rest (saving each batch as it arrives) and
-    have the study's kind assemble the Dataset."""
-    kind = kinds.get(study.kind)
-    store = PartStore(parts, kind.outputs) if parts is not None else None
-    started = store.started(_now()) if store is not None else _now()
-    results, rejected = store.resume([b.key for b, _ in tasks]) if store else ({}, 0)
-    sizes = {b.key: b.size for b, _ in tasks}
-    todo = [(b, t) for b, t in tasks if b.key not in results]
-    bar = Progress(sum(sizes.values()), sum(sizes[k] for k in results), progress,
-                   label=f"urmx {study.name}", unit=kind.unit)
-    if results or rejected:
-        bar.note(f"urmx: resuming from {parts}: {len(results)} of {len(tasks)} batches done"
-                 + (f"; {rejected} damaged or foreign part file(s) are computed again"
-                    if rejected else ""))
+def _resume(store: PartStore, sources: Sources) -> tuple[int, int]:
+    """Place the cells the parts folder holds: (cells found, part files rejected)."""
+    found, rejected = [], 0
+    for path, arrays in store.scan():
+        if arrays is None:
+            rejected += 1
+            continue
+        found.append((sources.register(path, arrays), arrays["cell_key"]))
+    return sources.match(found), rejected
+
+
+def _windows(batches: Iterator, size: int) -> Iterator[list]:
+    while chunk := list(itertools.islice(batches, size)):
+        yield chunk
+
+
+def _window(client: Any, first: list) -> int:
+    """Batches to hand to dask at once: `WINDOW`, or fewer when they would hold more than
+    `WINDOW_CELLS` cells (the tasks and results in flight stay small), but never fewer than
+    64 or 32 per worker (every worker stays busy)."""
+    try:
+        workers = len(client.scheduler_info().get("workers", ()))
+    except Exception:  # noqa: BLE001 - a scheduler that cannot say: the default
+        workers = 0
+    per = max(1, max((b.size for b, _ in first), default=1))
+    return max(32 * workers, 64, min(WINDOW, WINDOW_CELLS // per))
+
+
+def _client(scheduler: Any) -> tuple[Any, bool]:
+    """`get_client`, a cluster it starts keeping short logs of the messages it sent
+    (distributed keeps the last 1000 batches of messages of every connection, the batches'
+    tasks with them: hundreds of MB in the main process over a long study)."""
+    import dask
+    import distributed  # noqa: F401 - its config defaults first, kept when the set ends
+
+    with dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG}):
+        return get_client(scheduler)
+
+
+def _saver(cells: Cells, sources: Sources, bar: Progress, stats: RunStats) -> Callable:
+    """The callback that keeps each finished batch (a part, its cells placed)."""
+    kind = cells.kind
 
     def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
-        if store is not None:
-            store.save(batch.key, result)
-        results[batch.key] = result
-        bar.update(sizes[batch.key])
+        arrays = {}
+        for name, value in result.items():
+            if name.startswith("extra."):
+                _, local, rest = name.split(".", 2)
+                name = f"extra.{int(batch.cells.ravel()[int(local)]):016x}.{rest}"
+            arrays[name] = np.asarray(value)
+        for name in kind.outputs:
+            shape = arrays[name].shape if name in arrays else None
+            if shape is None or shape[:len(batch.shape)] != batch.shape:
+                raise RunError(f"the {kind.name!r} kind's run returned {name!r} of shape "
+                               f"{shape}, not its block's {batch.shape} (+ per-cell axes)")
+        arrays["cell_key"] = batch.cells
+        sources.add(batch.key, arrays, cells.flat(list(batch.block.values())))
+        stats.computed += batch.size
+        stats.batches += 1
+        bar.update(batch.size)
 
+    return on_result
+
+
+def _notes(cut: Cut, stats: RunStats, parts: Path | None, archive: str | None) -> list[str]:
+    """What a run says before it computes: the finished cells it found and where."""
+    notes = []
+    if stats.from_parts or stats.rejected:
+        finished, total = cut.counts()
+        notes.append(f"urmx: resuming from {parts}: {stats.from_parts:,} of {stats.runs:,} "
+                     f"{stats.unit} found, {finished} of {total} batches done"
+                     + (f"; {stats.rejected} damaged or foreign part file(s) are computed "
+                        "again" if stats.rejected else ""))
+    if stats.from_archive:
+        notes.append(f"urmx: {stats.from_archive:,} {stats.unit} taken from the archive "
+                     f"{archive}")
+    reused = stats.from_parts + stats.from_archive
+    if reused:
+        notes.append(f"urmx {stats.study}: {reused:,} of {stats.runs:,} {stats.unit} reused "
+                     f"({stats.from_parts:,} from parts, {stats.from_archive:,} from the "
+                     f"archive), {stats.runs - reused:,} to compute")
+    return notes
+
+
+def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
+         progress: bool, command: str | None, batch_size: int, kernel: Callable | None,
+         archive: tuple[Any, str] | None = None, notes: tuple[str, ...] = ()
+         ) -> xr.Dataset:
+    """Find the finished cells (parts, then `archive`: an earlier archive of the study,
+    opened, and its path), compute the rest (saving each batch
+    as it arrives) and have the study's kind assemble the Dataset (lazy over the parts when
+    there is a parts folder)."""
+    kind = kinds.get(study.kind)
+    cells = Cells(study, kind, records, kernel)
+    started = store.started(_now()) if store is not None else _now()
+    sources = Sources(cells, store)
+    pairs = cells.runnable()  # (wall, record): every other dimension runs whole
+    stats = RunStats(study.name, kind.unit, int(pairs.sum()) * (cells.size // pairs.size))
+    _LAST.append(stats)
+    del _LAST[:-1]
+    if store is not None:
+        stats.from_parts, stats.rejected = _resume(store, sources)
+    if archive is not None:
+        try:
+            stats.from_archive = take_over(sources, archive[0])
+        finally:
+            archive[0].close()
+    cut = Cut(cells, batch_size, sources.done())
+    bar = Progress(stats.runs, stats.from_parts + stats.from_archive, progress,
+                   label=f"urmx {study.name}", unit=kind.unit)
+    for line in (*notes, *_notes(cut, stats, store.folder if store else None,
+                                  archive[1] if archive else None)):
+        bar.note(line)
+    batches = (_made(cells, b, records, kernel) for b in cut)
     try:
-        compute(todo, records, study.records, scheduler, on_result, kind.run)
+        _compute_all(batches, stats.runs - stats.from_parts - stats.from_archive, records,
+                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run)
     except RunError as exc:
-        if store is None or not store.count():
+        kept = store.count() if store is not None else 0
+        if not kept:
             raise
-        raise RunError(f"{exc}; {len(results)} of {len(tasks)} batches are kept in "
-                       f"{str(parts)!r}: run again to resume") from None
+        left = sum(1 for _ in Cut(cells, batch_size, sources.done()))
+        raise RunError(f"{exc}; {kept} of {kept + left} batches are kept in "
+                       f"{str(store.folder)!r}: run again to resume") from None
     finally:
         bar.close()
-    return kind.assemble(study, records, tasks, results, global_attrs(study, started, command))
+    return _assemble(cells, sources, records, global_attrs(study, started, command),
+                     lazy=store is not None)
+
+
+def _assemble(cells: Cells, sources: Sources, records: dict, attrs: dict,
+              lazy: bool) -> xr.Dataset:
+    """The kind's Dataset of every cell's result; with `lazy`, over dask arrays gathered
+    from the parts, with ``cell_key`` and netCDF chunks of one slab."""
+    import xarray as xr
+
+    from .. import variables
+
+    kind = cells.kind
+    missing = sources.missing()
+    if missing:
+        raise RunError(f"{missing:,} {kind.unit} of study {cells.study.name!r} have no "
+                       "result after the run (a bug in urmx): run again")
+    arrays = sources.lazy() if lazy else sources.eager()
+    ds = kind.assemble(cells.study, records, {n: arrays[n] for n in kind.outputs},
+                       sources.extras(), attrs)
+    if lazy:
+        ds["cell_key"] = xr.Variable(cells.names, arrays["cell_key"],
+                                     attrs=variables.attrs("cell_key"))
+        for var in ds.variables.values():
+            if var.chunks is not None:
+                var.encoding["chunksizes"] = tuple(c[0] for c in var.chunks)
+    return ds
 
 
 def run_grid(study: Study, records: dict, scheduler: Any = "serial", *,
              batch_size: int = 16, kernel: Callable | None = None,
              command: str | None = None) -> xr.Dataset:
     """Run a study in memory: the batches, the scheduler and the Dataset assembly of
-    :func:`run_study`, without its archive (nothing kept on disk, no resume) and with the
-    records given rather than resolved from the manifest.
+    :func:`run_study`, without its archive (nothing kept on disk, no resume, no size
+    limits) and with the records given rather than resolved from the manifest.
 
     Parameters
     ----------
@@ -298,10 +511,10 @@ def run_grid(study: Study, records: dict, scheduler: Any = "serial", *,
     Returns
     -------
     xarray.Dataset
-        The same Dataset :func:`run_study` returns.
+        The Dataset :func:`run_study` returns without an archive (in memory).
     """
-    tasks = batch_tasks(study, records, batch_size, kernel)
-    return _run(study, records, tasks, None, scheduler, False, command)
+    _check_batch_size(batch_size)
+    return _run(study, records, None, scheduler, False, command, batch_size, kernel)
 
 
 def _check_batch_size(batch_size: Any) -> None:
@@ -349,10 +562,70 @@ def _parts_folder(out: str | os.PathLike, inputs: list[tuple[str, Path]] = ()
     return out, parts
 
 
+def _earlier_archive(out: Path, study: Study, force: bool, notes: list[str]) -> Any:
+    """The archive already at `out`, opened, when it holds the same study (its cells may
+    be reused); None when there is none or `force` replaces another one.
+
+    Raises
+    ------
+    urmx.errors.OutputError
+        `out` holds another study, or is no urmx study archive, and `force` is False.
+    """
+    if not out.exists():
+        return None
+    import xarray as xr
+
+    try:
+        ds = xr.open_dataset(out, engine="netcdf4")
+    except Exception:  # noqa: BLE001 - whatever it is, it is not an archive to reuse
+        ds = None
+    name = ds.attrs.get("study_name") if ds is not None else None
+    if name == study.name and "cell_key" not in ds.variables:
+        notes.append(f"urmx: {out} holds no cell keys (written by an older urmx): its "
+                     "cells are computed again")
+    if name == study.name:
+        return ds
+    if ds is not None:
+        ds.close()
+    what = f"study {name!r}" if name else "no urmx study archive"
+    if not force:
+        raise OutputError(f"--out {str(out)!r} holds {what}, not study {study.name!r}: "
+                          "give another --out, or --force to replace it")
+    notes.append(f"urmx: --force: {out} ({what}) is replaced by study {study.name!r}")
+    return None
+
+
+def _claim_parts(parts: Path, study: Study, kind: Any, force: bool,
+                 notes: list[str]) -> PartStore:
+    """The parts folder of `study`: refused when it holds another study's finished parts,
+    or parts of an urmx from before cells were keyed (they cannot resume, and whose they
+    are is not said), unless `force` removes them."""
+    store = PartStore(parts, kind.outputs)
+    owner, count = store.owner(), store.count()
+    who = None
+    if count and owner is not None and owner != study.name:
+        who = f"study {owner!r}"
+    elif count and owner is None and store.legacy():
+        who = "an older urmx (parts without cell keys, which cannot resume)"
+    if who is not None:
+        if not force:
+            raise RunError(f"{str(parts)!r} holds {count} finished part(s) of {who}, not "
+                           f"of study {study.name!r}: finish that study with the same --out, "
+                           "give another --out, or --force to discard them")
+        notes.append(f"urmx: --force: removed {store.clear()} finished part(s) of {who} "
+                     f"from {parts}")
+    elif count == 0 and owner != study.name:
+        store.clear()  # the start time of another study's run that saved nothing
+    store.claim(study.name)
+    return store
+
+
 def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None = None,
               scheduler: Any = None, progress: bool = True, batch_size: int = 16,
               records_dir: str | os.PathLike | None = None, kernel: Callable | None = None,
-              command: str | None = None) -> xr.Dataset:
+              command: str | None = None, force: bool = False,
+              max_cells: float | None = MAX_CELLS, max_gb: float | None = MAX_GB
+              ) -> xr.Dataset:
     """Run a study of any kind and return one labelled Dataset (and write it to `out`).
 
     Parameters
@@ -361,12 +634,13 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         A loaded study, a study file, or the name of a catalog study.
     out : str or path, optional
         netCDF archive to write. Finished batches are kept in ``<out>.parts/`` until the
-        archive is written, so an interrupted run resumes where it stopped. Resolved
-        (symbolic links, ``..``) and checked before any work: a folder, a place where a
-        test file cannot be written (no permission, a full disk), a name that is not UTF-8,
-        or an input of the run (the study file, a record's file, the records manifest) is
-        refused; a second run on the same archive while one is running stops with a
-        `urmx.errors.RunError`.
+        archive is written, so an interrupted run resumes where it stopped; an earlier
+        archive of the same study (its ``study_name``) lends every cell it holds (module
+        docstring). Resolved (symbolic links, ``..``) and checked before any work: a
+        folder, a place where a test file cannot be written (no permission, a full disk), a
+        name that is not UTF-8, or an input of the run (the study file, a record's file,
+        the records manifest) is refused; a second run on the same archive while one is
+        running stops with a `urmx.errors.RunError`.
     scheduler : None, "serial", "threads", "processes", address or distributed.Client
         Where batches run (`urmx.study.clients`). Default: the ``distributed.Client``
         already active in this process, else this process for a small study (estimated
@@ -375,7 +649,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         `urmx.errors.InputError`.
     progress : bool
         Show progress on stderr (a bar with rate and ETA on a terminal, plain lines in a
-        log file), counted in the kind's unit.
+        log file), counted in the kind's unit, and say what was reused.
     batch_size : int
         Target number of cells per batch (the kind's unit: analyses for a grid), >= 1. [1]
     records_dir : str or path, optional
@@ -384,62 +658,99 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         Integrator with the signature of `urmx.kernel.run` (default), e.g. a reference solver.
     command : str, optional
         Command line for the ``history`` attribute.
+    force : bool
+        Replace an `out` that holds another study (or no urmx study), and discard the
+        finished parts of another study in its parts folder; without it both stop the run.
+    max_cells, max_gb : float or None
+        Limits on the study's cells and its archive's (uncompressed) size [GB]
+        (`urmx.study.limits`; None: no limit); a larger study stops before any work.
 
     Returns
     -------
     xarray.Dataset
-        The study kind's Dataset (`urmx.study.kinds`). Outputs of cells that were not run,
-        or have no valid result, are NaN (integer outputs are float64 in memory, int32 with
-        ``_FillValue`` -1 on disk).
+        The study kind's Dataset (`urmx.study.kinds`): with `out`, the archive reopened
+        lazily (`urmx.open_study`), else in memory. Outputs of cells not run or with no
+        valid result are NaN (integers: float64 in memory, int32 with _FillValue -1 on disk).
 
     Raises
     ------
     urmx.UrmxError
         Bad arguments or study file (`urmx.errors.InputError`,
-        `urmx.catalog.CatalogError`), an archive that cannot be written
-        (`urmx.errors.OutputError`, also for a full disk, saying what is kept), another
-        run on the same archive, an unreachable scheduler, a cluster that lost a batch for
-        good, a worker that runs other code, no worker left for ``urmx.worker-timeout``
-        seconds or the scheduler gone (`urmx.errors.RunError`).
+        `urmx.catalog.CatalogError`), a study over the limits
+        (`urmx.study.limits.SizeError`), an archive that cannot be written or holds another
+        study (`urmx.errors.OutputError`, also for a full disk, saying what is kept),
+        another run on the same archive, another study's parts, an unreachable scheduler,
+        a cluster that lost a batch for good, a worker that runs other code, no worker left
+        for ``urmx.worker-timeout`` seconds or the scheduler gone (`urmx.errors.RunError`).
     """
     refuse_in_worker_import()
     _check_batch_size(batch_size)
     check_scheduler(scheduler)
+    s = study if isinstance(study, Study) else load_study(study)
+    check_size(s, kinds.get(s.kind), max_cells, max_gb)
     parts = None
     if out is not None:  # an input never becomes the output
-        study = study if isinstance(study, Study) else load_study(study)
-        out, parts = _parts_folder(out, input_files(study, records_dir))
-
-    def prepare():
-        s = study if isinstance(study, Study) else load_study(study)
-        records = resolve_records(s, records_dir)
-        return s, records, batch_tasks(s, records, batch_size, kernel)
-
+        out, parts = _parts_folder(out, input_files(s, records_dir))
     if parts is None:
-        return _run(*prepare(), None, scheduler, progress, command)
+        return _run(s, resolve_records(s, records_dir), None, scheduler, progress, command,
+                    batch_size, kernel)
     with Lock(parts, out):  # before reading records: a second run stops at once
+        _into_archive(s, out, parts, force, records_dir, scheduler, progress, command,
+                      batch_size, kernel)
+    from .archive import open_study
+
+    return open_study(out)
+
+
+def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir: Any,
+                  *args: Any) -> None:
+    """Run `study` into the archive `out` (its lock held): check whose archive and parts
+    these are, resolve the records, run (``*args``: scheduler, progress, command,
+    batch_size, kernel of `_run`), write, remove the parts. A failure to write a part or
+    the archive (a full disk) says how many finished batches are kept and how to go on."""
+    try:
+        notes: list[str] = []
+        earlier = _earlier_archive(out, study, force, notes)
         try:
-            ds = _run(*prepare(), parts, scheduler, progress, command)
-        except BaseException as exc:
-            if not any(parts.glob("*.npz")):  # nothing to resume from: leave nothing
-                shutil.rmtree(parts, ignore_errors=True)
-            if isinstance(exc, OutputError):  # a full disk while saving parts
+            store = _claim_parts(parts, study, kinds.get(study.kind), force, notes)
+            records = resolve_records(study, records_dir)
+            try:
+                ds = _run(study, records, store, *args,
+                          archive=(earlier, str(out)) if earlier is not None else None,
+                          notes=tuple(notes))
+            except OutputError as exc:  # a full disk while saving parts
                 raise _kept(exc, parts, "and run the same command again to resume") \
                     from None
-            raise
-        _write_archive(ds, out, parts)
-        shutil.rmtree(parts, ignore_errors=True)
-    return ds
-
-
-def _write_archive(ds: xr.Dataset, out: Path, parts: Path) -> None:
-    """Write the archive; a failure (a full disk) says that the parts are kept and how to
-    finish."""
+        finally:
+            if earlier is not None:
+                earlier.close()
+    except BaseException:
+        if not any(parts.glob("*.npz")):  # nothing to resume from: leave nothing
+            shutil.rmtree(parts, ignore_errors=True)
+        raise
     try:
-        write_netcdf(ds, out)
+        _write(ds, out)
     except OutputError as exc:
         raise _kept(exc, parts, "and run the same command again: the archive is written "
                     "from them, nothing is computed again") from None
+    shutil.rmtree(parts, ignore_errors=True)
+
+
+def _write(ds: xr.Dataset, out: Path) -> None:
+    """Write the lazy Dataset of a run, slab by slab, in this process (never on a cluster
+    that may be the default dask scheduler: its workers need not see the parts), with no
+    chunk cache (`CHUNK_CACHE`): each slab is one whole netCDF chunk, written once, so a
+    cache only holds memory (netCDF's default is 64 MiB per variable)."""
+    import dask
+    import netCDF4
+
+    saved = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(CHUNK_CACHE, 61, 1.0)
+    try:
+        with dask.config.set(scheduler="synchronous"):
+            write_netcdf(ds, out)
+    finally:
+        netCDF4.set_chunk_cache(*saved)
 
 
 def _kept(exc: OutputError, parts: Path, then: str) -> OutputError:

@@ -54,8 +54,8 @@ def kind_of(ds: xr.Dataset) -> str | None:
         study = {}
     if isinstance(study, dict) and study:
         present = {k for k, v in study.items() if isinstance(v, dict) and k in kinds.tables()}
-        found = [k for k in registered if (k.table in present if present else k.table is None)
-                 and present <= {k.table, *k.combines}]
+        found = kinds.fitting(present) if present else [k for k in registered
+                                                        if k.table is None]
         if found:
             return found[0].name
     found = [k for k in registered if k.counts is not None and k.counts(ds) is not None]

@@ -2,12 +2,12 @@
 diaphragm x record x cor (x scale, impact, damping when the study adds them), the peak
 outputs of every cell and the time histories of the study's ``[[study.history]]`` cells.
 
-A batch is a group of walls on one diaphragm under one record, over every value of the
-other dimensions; it returns numpy arrays of shape (walls, cor, scale, impact, damping)
-(:func:`run_batch`, the layout its saved parts keep), and the Dataset is built once from
-them (:func:`assemble`). Every output of a cell whose status is not ``ok`` or
-``collapsed`` (left out by the study's pairs, or stopped at the event limit) is NaN; the
-integer outputs are float64 in the Dataset and int32 with a CF ``_FillValue`` on disk.
+A batch is any block of cells of one record (`urmx.study.batches`); :func:`run_batch` returns
+numpy arrays of the block's shape per output (and the kept histories of the block's cells
+that keep one, as extra arrays), and the Dataset is built once from every cell's outputs
+(:func:`assemble`). Every output of a cell whose status is not ``ok`` or ``collapsed``
+(left out by the study's pairs, or stopped at the event limit) is NaN; the integer outputs
+are float64 in the Dataset and int32 with a CF ``_FillValue`` on disk.
 """
 
 from __future__ import annotations
@@ -19,51 +19,53 @@ import numpy as np
 
 from ... import variables
 from ...netcdf import INT_FILL  # the integer outputs' _FillValue on disk
-from ..batches import Batch, by_walls
+from ..batches import Batch
 from ..dataset import MISSING, NOT_RUN, STATUS, VALID
-from ..parts import task_key
 from .kind import Kind
 
 if TYPE_CHECKING:
     import xarray as xr
 
-#: the arrays every batch of :func:`run_batch` returns (besides its kept histories)
-BATCH_OUTPUTS = (*variables.SCALARS, "status", "history_labels")
+#: the arrays every batch of :func:`run_batch` returns, one value per cell
+BATCH_OUTPUTS = (*variables.SCALARS, "status")
 ADDED = ("scale", "impact", "damping")  # the dimensions a study may add, in order
 
 
-def _task(study: Any, batch: Batch, records: dict, kernel: Callable | None) -> dict[str, Any]:
-    """Everything a worker needs for one batch (picklable, no xarray); sets its key."""
-    d = study.diaphragms[batch.diaphragm]
-    rec = records[study.records[batch.record]]
-    dampings = study.extra.get("damping", [None])
-    walls = [[study.wall(study.walls[iw], d, z) for z in dampings] for iw in batch.walls]
-    hist = []
+def extras(study: Any) -> dict[tuple[int, ...], str]:
+    """The cells whose time history is kept (at the first scale, impact and damping), by
+    index over the study's dimensions: their history label."""
+    out = {}
     for h in study.histories:
-        if h.diaphragm == d.id and h.record == rec.id:
-            ids = [study.walls[iw].id for iw in batch.walls]
-            if h.wall in ids:
-                hist.append((ids.index(h.wall), study.cor.index(h.cor), h.label))
-    task = dict(
-        walls=walls, dt=rec.dt, scale_factor=rec.scale_factor, cor=list(study.cor),
-        scale=study.extra.get("scale", [1.0]), impact=study.extra.get("impact", [study.impact]),
-        tail=study.tail, history=hist, kernel=kernel,
-        has_damping="damping" in study.extra)
-    batch.key = task_key(task, rec, walls=[[w.to_dict() for w in ws] for ws in walls])
-    return task
+        index = (next(i for i, w in enumerate(study.walls) if w.id == h.wall),
+                 next(i for i, d in enumerate(study.diaphragms) if d.id == h.diaphragm),
+                 study.records.index(h.record), study.cor.index(h.cor))
+        out[index + (0,) * sum(k in study.extra for k in ADDED)] = h.label
+    return out
 
 
-def tasks(study: Any, records: dict, batch_size: int = 16,
-          kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
-    """The batches of a grid, each with its task and key: walls grouped to reach about
-    `batch_size` analyses (`urmx.study.batches.by_walls`)."""
-    return [(b, _task(study, b, records, kernel)) for b in by_walls(study, study.dims,
-                                                                      batch_size)]
+def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> dict[str, Any]:
+    """Everything a worker needs for one block of cells (picklable, no xarray)."""
+    b = batch.block
+    rec = records[study.records[batch.record]]
+    dampings = [study.extra["damping"][i] for i in b["damping"]] if "damping" in b else [None]
+    walls = [[[study.wall(study.walls[iw], study.diaphragms[idp], z) for z in dampings]
+              for idp in b["diaphragm"]] for iw in b["wall"]]
+    index = {cell: label for cell, label in extras(study).items()
+             if all(i in ix for i, ix in zip(cell, b.values(), strict=True))}
+    hist = [int(np.ravel_multi_index(tuple(ix.index(i) for i, ix in zip(cell, b.values(),
+                                                                       strict=True)),
+                                     batch.shape)) for cell in index]
+    return dict(
+        walls=walls, dt=rec.dt, scale_factor=rec.scale_factor,
+        cor=[study.cor[i] for i in b["cor"]],
+        scale=[study.extra["scale"][i] for i in b["scale"]] if "scale" in b else [1.0],
+        impact=[study.extra["impact"][i] for i in b["impact"]] if "impact" in b
+        else [study.impact], tail=study.tail, history=hist, kernel=kernel, shape=batch.shape)
 
 
-def unrun(shape) -> dict[str, np.ndarray]:
+def _unrun(shape) -> dict[str, np.ndarray]:
     """A batch's output arrays before its cells run: NaN, INT_FILL for integers, status
-    not_run (the sampling kind's time histories start from them too)."""
+    not_run."""
     out: dict[str, np.ndarray] = {}
     for name in variables.SCALARS:
         if name in variables.INTEGER_SCALARS:
@@ -75,72 +77,49 @@ def unrun(shape) -> dict[str, np.ndarray]:
 
 
 def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.ndarray]:
-    """Run one batch through the kernel: numpy arrays of shape (walls, cor, scale, impact,
-    damping) per output, plus the kept time histories. Numpy only."""
+    """Run one block through the kernel: a numpy array of the block's shape per output,
+    and ``extra.<i>.<name>`` arrays of the kept time histories (``i`` the cell's flat index
+    in the block). Numpy only."""
     kernel = task["kernel"]
     if kernel is None:
         from ...kernel import run as kernel
-    nw, nz = len(task["walls"]), len(task["walls"][0])
-    shape = (nw, len(task["cor"]), len(task["scale"]), len(task["impact"]), nz)
-    out = unrun(shape)
-    hist = {(iw, ic): label for iw, ic, label in task["history"]}
-    labels = []
-    for iw, ic, isc, ii, iz in np.ndindex(*shape):
-        keep = (iw, ic) in hist and isc == 0 and ii == 0 and iz == 0
+    walls = task["walls"]
+    shape = (len(walls), len(walls[0]), len(task["cor"]), len(task["scale"]),
+             len(task["impact"]), len(walls[0][0]))
+    out = _unrun(shape)
+    kept = set(task["history"])
+    for n, (iw, idp, ic, isc, ii, iz) in enumerate(np.ndindex(*shape)):
         kw = dict(scale=task["scale_factor"] * task["scale"][isc], cor=task["cor"][ic],
                   impact=task["impact"][ii], tail=task["tail"])
-        if keep:
+        if n in kept:
             kw["history"] = True
-        result = kernel(task["walls"][iw][iz], acceleration, task["dt"], **kw)
+        result = kernel(walls[iw][idp][iz], acceleration, task["dt"], **kw)
         for name in variables.SCALARS:
-            out[name][iw, ic, isc, ii, iz] = result[name]
-        out["status"][iw, ic, isc, ii, iz] = STATUS.index(result["status"])
-        if keep:
+            out[name][iw, idp, ic, isc, ii, iz] = result[name]
+        out["status"][iw, idp, ic, isc, ii, iz] = STATUS.index(result["status"])
+        if n in kept:
             h = result["history"]
-            j = len(labels)
-            labels.append(hist[(iw, ic)])
             for name in (*variables.HISTORIES, "time"):
                 if name in h:
-                    out[f"history{j}.{name}"] = np.asarray(h[name], dtype=np.float64)
-    out["history_labels"] = np.array(labels, dtype=str)
-    return out
+                    out[f"extra.{n}.{name}"] = np.asarray(h[name], dtype=np.float64)
+    return {k: v if k.startswith("extra.") else v.reshape(task["shape"]) for k, v in out.items()}
 
 
 # ---- the Dataset ----------------------------------------------------------------------------
 
-def _block(study: Any) -> Callable[[np.ndarray, Batch], np.ndarray]:
-    """How a batch's (walls, cor, scale, impact, damping) array maps onto its block of the
-    study's dimensions (the added dimensions the study lacks dropped)."""
-    absent = [2 + i for i, k in enumerate(ADDED) if k not in study.extra]
-
-    def block(values: np.ndarray, batch: Batch) -> np.ndarray:
-        kept = [n for i, n in enumerate(values.shape) if i not in absent]
-        return values.reshape(kept[0], 1, 1, *kept[1:])
-
-    return block
-
-
-def _outputs(study: Any, tasks: list, results: dict) -> dict[str, np.ndarray]:
+def _outputs(cells: dict) -> dict[str, Any]:
     """Every output over the study's dimensions: float64, NaN where no valid result exists
-    (integer outputs too, so that sums and means over the grid skip those cells)."""
-    from ..dataset import cell_array
-
-    shape = tuple(len(v) for v in study.dims.values())
-    batches = [b for b, _ in tasks]
-    block = _block(study)
-    status = cell_array(shape, batches, results, "status", block, NOT_RUN, np.int8)
+    (integer outputs too, so that sums and means over the grid skip those cells). Numpy or
+    dask arrays alike."""
+    status = cells["status"]
     invalid = ~np.isin(status, VALID)
-    data = {}
-    for name in variables.SCALARS:
-        data[name] = cell_array(shape, batches, results, name, block)
-        data[name][invalid] = np.nan
+    data = {name: np.where(invalid, np.nan, cells[name].astype(np.float64))
+            for name in variables.SCALARS}
     data["status"] = status
     return data
 
 
 def output_attrs(name: str) -> dict[str, Any]:
-    """Attributes of a grid output (the sampling kind's time histories too): the
-    registry's, with what a missing cell holds (the status' CF flags)."""
     from ..dataset import status_attrs
 
     if name == "status":
@@ -166,20 +145,20 @@ def _added_coords(study: Any) -> dict[str, xr.Variable]:
     return coords
 
 
-def assemble(study: Any, records: dict, tasks: list, results: dict,
+def assemble(study: Any, records: dict, cells: dict, extras: dict,
              attrs: dict[str, Any]) -> xr.Dataset:
     """The Dataset of a grid: every output over the study's dimensions, the shared and the
-    added dimensions' coordinates, and the kept histories."""
+    added dimensions' coordinates, and the kept histories (`extras`, by label)."""
     import xarray as xr
 
     from ..dataset import grid_coords
 
     names = list(study.dims)
     data_vars = {name: xr.Variable(names, arr, attrs=output_attrs(name))
-                 for name, arr in _outputs(study, tasks, results).items()}
+                 for name, arr in _outputs(cells).items()}
     coords = {**grid_coords(study, records), **_added_coords(study)}
     if study.histories:
-        hist_coords, hist_vars = _histories(study, tasks, results)
+        hist_coords, hist_vars = _histories(study, extras)
         coords.update(hist_coords)
         data_vars.update(hist_vars)
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
@@ -187,25 +166,13 @@ def assemble(study: Any, records: dict, tasks: list, results: dict,
 
 # ---- kept histories ---------------------------------------------------------------------------
 
-def _kept(tasks: list, results: dict) -> dict[str, dict[str, np.ndarray]]:
-    """Every kept history by label: its arrays (time and the histories) as the batch
-    returned them."""
-    hist: dict[str, dict[str, np.ndarray]] = {}
-    for batch, _ in tasks:
-        r = results[batch.key]
-        for j, label in enumerate(r["history_labels"]):
-            prefix = f"history{j}."
-            hist[str(label)] = {k[len(prefix):]: v for k, v in r.items() if k.startswith(prefix)}
-    return hist
-
-
-def _histories(study: Any, tasks: list, results: dict) -> tuple[dict, dict]:
-    """(coordinates, variables) of the kept histories on one time axis."""
+def _histories(study: Any, hist: dict) -> tuple[dict, dict]:
+    """(coordinates, variables) of the kept histories (`hist`: arrays by label) on one
+    time axis."""
     import xarray as xr
 
     from ..dataset import coord
 
-    hist = _kept(tasks, results)
     cells = study.histories
     labels = [h.label for h in cells]
     time, hist_dt = _history_time(hist, labels)
@@ -287,5 +254,12 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
     return {name: int((status == code).sum()) for code, name in enumerate(STATUS)}
 
 
-KIND = Kind(name="grid", unit="analyses", outputs=BATCH_OUTPUTS, tasks=tasks, run=run_batch,
-            assemble=assemble, reopen=reopen, counts=counts)
+def cell_bytes(study: Any) -> float:
+    """Bytes of one cell's outputs in the archive: float64, int32 for the integer outputs,
+    int8 for the status. [B]"""
+    return sum(4 if n in variables.INTEGER_SCALARS else 8 for n in variables.SCALARS) + 1
+
+
+KIND = Kind(name="grid", unit="analyses", outputs=BATCH_OUTPUTS, task=task, run=run_batch,
+            assemble=assemble, reopen=reopen, extras=extras,
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes, counts=counts)

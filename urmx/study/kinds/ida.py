@@ -4,10 +4,12 @@ the lognormal fragility fit of each (wall, diaphragm, cor) over the records.
 
 The table holds ``im`` (the intensity measure), ``rtol``, ``step``, ``max_intensity`` and
 ``sa_avg_range`` (`IdaSettings`; defaults those of `urmx.fragility.collapse_capacity`). A
-batch is a group of walls of one diaphragm and record over every cor (:func:`run_batch`,
-numpy only). A cell the study's pairs leave out is missing in every output: NaN, with
-``censored``, ``analyses`` and ``event_limits`` float64 in the Dataset and int32 with the
-``_FillValue`` on disk.
+batch is any block of cells of one record (`urmx.study.batches`; :func:`run_batch`, numpy
+only); the record's intensity for each wall and its predominant frequency travel with every
+cell (computed once per batch, and the frequency once per record on each worker). A cell
+the study's pairs leave out is missing in every output: NaN, with ``censored``,
+``analyses`` and ``event_limits`` float64 in the Dataset and int32 with the ``_FillValue``
+on disk.
 
 The capacities are scale factors times the record's intensity, so one run holds the
 capacities in every measure: the archive keeps the scale factor at collapse
@@ -31,17 +33,20 @@ import numpy as np
 from ... import fragility, variables
 from ...netcdf import INT_FILL
 from ...records.measures import dominant_frequency
-from ..batches import Batch, by_walls
-from ..parts import task_key
+from ..batches import Batch
 from .kind import Kind
 
 if TYPE_CHECKING:
     import xarray as xr
 
-#: the arrays every batch of :func:`run_batch` returns (a saved part lacking one is
+#: the arrays every batch of :func:`run_batch` returns, per cell (a saved part lacking one is
 #: computed again)
 OUTPUTS = ("capacity", "censored", "analyses", "event_limits", "intensity", "ratio", "unit",
            "predominant")
+#: the archive variable each output is kept in (cells taken over from an earlier archive)
+ARCHIVED = {"capacity": "collapse_intensity", "ratio": "instability_ratio",
+            "unit": "record_intensity", "predominant": "predominant_frequency"}
+CURVE_POINTS = 64  # points of an IDA curve assumed by the size check (a generous bound)
 #: the outputs of an IDA archive with one value per (wall, diaphragm, record, cor) cell
 CELL_OUTPUTS = ("collapse_intensity", "censored", "analyses", "event_limits",
                 "instability_ratio")
@@ -159,91 +164,79 @@ def dims(study: Any) -> dict[str, list]:
     return {k: study.dims[k] for k in DIMS}
 
 
-def tasks(study: Any, records: dict, batch_size: int = 16,
-          kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
-    """Batches of up to `batch_size` cells (walls x cor) of one diaphragm and one record,
-    each with the key of everything that decides its result (the settings, walls, record
-    samples, urmx version and `urmx.jitcache.SOURCE_HASH`)."""
-    settings = study.settings.to_dict()
-    out = []
-    first = {}  # the first batch of each record computes its predominant frequency
-    for batch in by_walls(study, dims(study), batch_size):
-        rec = records[study.records[batch.record]]
-        d = study.diaphragms[batch.diaphragm]
-        task = dict(walls=[study.wall(study.walls[iw], d) for iw in batch.walls],
-                    dt=rec.dt, scale_factor=rec.scale_factor, cor=list(study.cor),
-                    impact=study.impact, ida=settings, kernel=kernel,
-                    predominant=first.setdefault(batch.record, batch) is batch)
-        batch.key = task_key(task, rec, prefix="ida-", kind="ida",
-                             walls=[w.to_dict() for w in task["walls"]])
-        out.append((batch, task))
-    return out
+def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> dict[str, Any]:
+    """Everything a worker needs for one block of cells (picklable, no xarray)."""
+    b = batch.block
+    rec = records[study.records[batch.record]]
+    return dict(walls=[[study.wall(study.walls[iw], study.diaphragms[idp])
+                        for idp in b["diaphragm"]] for iw in b["wall"]],
+                dt=rec.dt, scale_factor=rec.scale_factor, record=rec.digest,
+                cor=[study.cor[i] for i in b["cor"]], impact=study.impact,
+                ida=study.settings.to_dict(), kernel=kernel)
+
+
+_PREDOMINANT: dict[tuple, float] = {}  # a worker's predominant frequencies, by record
+
+
+def _predominant(task: dict, acc: np.ndarray) -> float:
+    """The record's predominant frequency, computed once per record in each process."""
+    key = (task["record"], task["scale_factor"], task["dt"])
+    if key not in _PREDOMINANT:
+        if len(_PREDOMINANT) > 256:
+            _PREDOMINANT.clear()
+        _PREDOMINANT[key] = float(dominant_frequency(acc, task["dt"]))
+    return _PREDOMINANT[key]
 
 
 def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
-    """One batch: the collapse capacity of every (wall, cor) cell, as numpy arrays
-    (capacity, censored, analyses, event_limits of shape (walls, cor); the IDA points
-    ``intensity`` and ``ratio`` of shape (walls, cor, points), NaN-padded; the record's
-    intensity ``unit`` per wall; the record's ``predominant`` frequency when the task asks
-    for it, else NaN). Numpy only."""
+    """One block: the collapse capacity of every (wall, diaphragm, cor) cell, as numpy
+    arrays of the block's shape (capacity, censored, analyses, event_limits; the IDA points
+    ``intensity`` and ``ratio`` with a last axis of points, NaN-padded; the record's
+    intensity ``unit`` for the cell's wall and its ``predominant`` frequency). Numpy only."""
     kernel = task["kernel"]
     if kernel is None:
         from ...kernel import run as kernel
     acc = np.ascontiguousarray(acceleration * task["scale_factor"], dtype=np.float64)
-    ida, walls, dt = task["ida"], task["walls"], task["dt"]
-    unit = fragility.record_intensities(acc, dt, ida["im"], walls, ida.get("sa_avg_range"))
-    shape = (len(walls), len(task["cor"]))
+    ida, dt = task["ida"], task["dt"]
+    walls = [w for row in task["walls"] for w in row]
+    shape = (len(task["walls"]), len(task["walls"][0]), 1, len(task["cor"]))
+    unit = fragility.record_intensities(acc, dt, ida["im"], walls,
+                                        ida.get("sa_avg_range")).reshape(shape[:2])
     results = {}
-    for iw, ic in np.ndindex(*shape):
-        results[iw, ic] = fragility.cell_capacity(
-            kernel, walls[iw], acc, dt, float(unit[iw]), ida["im"], task["cor"][ic],
-            task["impact"], ida["rtol"], ida["step"], ida["max_intensity"])
+    for iw, idp, _, ic in np.ndindex(*shape):
+        results[iw, idp, ic] = fragility.cell_capacity(
+            kernel, task["walls"][iw][idp], acc, dt, float(unit[iw, idp]), ida["im"],
+            task["cor"][ic], task["impact"], ida["rtol"], ida["step"], ida["max_intensity"])
     k = max(r.analyses for r in results.values())
     out = {"capacity": np.full(shape, np.nan), "censored": np.zeros(shape, bool),
            "analyses": np.zeros(shape, np.int32), "event_limits": np.zeros(shape, np.int32),
            "intensity": np.full((*shape, k), np.nan), "ratio": np.full((*shape, k), np.nan),
-           "unit": unit, "predominant": np.array(
-               dominant_frequency(acc, dt) if task["predominant"] else np.nan)}
-    for (iw, ic), r in results.items():
-        out["capacity"][iw, ic] = r.capacity
-        out["censored"][iw, ic] = r.censored
-        out["analyses"][iw, ic] = r.analyses
-        out["event_limits"][iw, ic] = r.event_limits
-        out["intensity"][iw, ic, :r.analyses] = r.intensity
-        out["ratio"][iw, ic, :r.analyses] = r.instability_ratio
+           "unit": np.broadcast_to(unit[:, :, None, None], shape).copy(),
+           "predominant": np.full(shape, _predominant(task, acc))}
+    for (iw, idp, ic), r in results.items():
+        at = (iw, idp, 0, ic)
+        out["capacity"][at] = r.capacity
+        out["censored"][at] = r.censored
+        out["analyses"][at] = r.analyses
+        out["event_limits"][at] = r.event_limits
+        out["intensity"][at][:r.analyses] = r.intensity
+        out["ratio"][at][:r.analyses] = r.instability_ratio
     return out
 
 
 # ---- the Dataset ----------------------------------------------------------------------------
 
-def _on_block(values: np.ndarray, batch: Batch) -> np.ndarray:
-    """A batch's (walls, cor, ...) array on its (wall, diaphragm, record, cor) block."""
-    return values.reshape(values.shape[0], 1, 1, *values.shape[1:])
-
-
-def _cells(study: Any, tasks: list, results: dict) -> dict[str, np.ndarray]:
-    """Every per-cell output over (wall, diaphragm, record, cor [, intensity_step]):
-    float64, NaN where the cell was not run (the flag and counts too, so that sums and
-    means skip those cells; int32 with a _FillValue on disk)."""
-    from ..dataset import cell_array
-
-    batches = [b for b, _ in tasks]
-    shape = tuple(len(v) for v in dims(study).values())
-    k = max([results[b.key]["intensity"].shape[-1] for b in batches] or [1])
-    out = {name: cell_array(shape, batches, results, source, _on_block)
-           for name, source in (("collapse_intensity", "capacity"), ("censored", "censored"),
-                                ("analyses", "analyses"), ("event_limits", "event_limits"))}
-    for name, source in (("intensity", "intensity"), ("instability_ratio", "ratio")):
-        out[name] = cell_array((*shape, k), batches, results, source, _on_block)
-    unit = np.full(shape[:3], np.nan)  # of the record per (wall, diaphragm, record)
-    predominant = np.full(shape[2], np.nan)
-    for b in batches:
-        r = results[b.key]
-        unit[np.ix_(b.walls, [b.diaphragm], [b.record])] = r["unit"].reshape(-1, 1, 1)
-        if np.isfinite(r["predominant"]):
-            predominant[b.record] = r["predominant"]
-    out["record_intensity"] = unit
-    out["predominant_frequency"] = predominant
+def _cells(cells: dict) -> dict[str, np.ndarray]:
+    """Every per-cell output over (wall, diaphragm, record, cor [, intensity_step]), in
+    memory: float64, NaN where the cell was not run (the flag and counts too, so that sums
+    and means skip those cells; int32 with a _FillValue on disk); the record's intensity
+    per (wall, diaphragm, record) and its predominant frequency per record."""
+    c = {name: np.asarray(v) for name, v in cells.items()}
+    out = {"collapse_intensity": c["capacity"], "censored": c["censored"],
+           "analyses": c["analyses"], "event_limits": c["event_limits"],
+           "intensity": c["intensity"], "instability_ratio": c["ratio"]}
+    out["record_intensity"] = np.fmax.reduce(c["unit"], axis=3)
+    out["predominant_frequency"] = np.fmax.reduce(c["predominant"], axis=(0, 1, 3))
     return out
 
 
@@ -352,7 +345,7 @@ def _coords(study: Any, records: dict, cells: dict, attrs: Callable) -> dict[str
     return coords
 
 
-def assemble(study: Any, records: dict, tasks: list, results: dict,
+def assemble(study: Any, records: dict, cells: dict, extras: dict,
              attrs: dict[str, Any]) -> xr.Dataset:
     """The Dataset of an IDA study: capacities, censoring, IDA curves and the lognormal
     fits per (wall, diaphragm, cor), with the grid's coordinates."""
@@ -364,7 +357,7 @@ def assemble(study: Any, records: dict, tasks: list, results: dict,
     def var_attrs(name, **extra):
         return {**variables.attrs(name, None, **ctx), **extra}
 
-    cells = _cells(study, tasks, results)
+    cells = _cells(cells)
     measures = _record_measures(study, records)
     cells.update({k: measures.pop(k) for k in ("sa_avg_period_low", "sa_avg_period_high")})
     fits = _fits(cells["collapse_intensity"], cells["censored"])
@@ -397,6 +390,12 @@ def reopen(ds: xr.Dataset) -> xr.Dataset | None:
     return ds
 
 
+def cell_bytes(study: Any) -> float:
+    """Bytes of one cell's outputs in the archive, for IDA curves of `CURVE_POINTS`
+    points. [B]"""
+    return 8 + 3 * 4 + 2 * 8 * CURVE_POINTS
+
+
 def counts(ds: xr.Dataset) -> dict[str, int] | None:
     """The cells of an IDA archive: ``collapsed`` (a capacity), ``censored`` (survived
     max_intensity) and ``missing`` (not run); None when `ds` is not an IDA archive."""
@@ -408,5 +407,5 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 
 
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
-            tasks=tasks, run=run_batch, assemble=assemble, reopen=reopen, counts=counts,
-            keys=KEYS)
+            task=task, run=run_batch, assemble=assemble, reopen=reopen, archived=ARCHIVED,
+            cell_bytes=cell_bytes, counts=counts, keys=KEYS)

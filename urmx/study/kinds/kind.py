@@ -4,7 +4,7 @@ described in `urmx.study.kinds`)."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 
@@ -15,7 +15,7 @@ class Kind:
     name: str
     unit: str
     outputs: tuple[str, ...]
-    tasks: Callable[..., list]
+    task: Callable[..., dict]
     run: Callable[..., dict]
     assemble: Callable[..., Any]
     table: str | None = None
@@ -23,9 +23,18 @@ class Kind:
     parse: Callable[[Any], Any] | None = None
     dims: Callable[[Any], dict[str, list]] | None = None
     reopen: Callable[[Any], Any] | None = None
+    identity: Callable[[Any, dict], dict[str, list]] | None = None
+    extras: Callable[[Any], dict[tuple[int, ...], str]] | None = None
+    fills: dict[str, tuple[Any, Any]] = field(default_factory=dict)
+    archived: dict[str, str] = field(default_factory=dict)
+    cell_bytes: Callable[[Any], float] | None = None
     counts: Callable[[Any], dict[str, int] | None] | None = None
     keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""
         return self.dims(study) if self.dims is not None else study.dims
+
+    def fill(self, name: str) -> tuple[Any, Any]:
+        """(value, dtype) of output `name` in a cell with no result (default NaN, float64)."""
+        return self.fills.get(name, (float("nan"), "float64"))

@@ -1,8 +1,9 @@
-"""The sampling study kind (a ``[study.sampling]`` table): each sample is a wall whose
+"""The sampling study kinds (a ``[study.sampling]`` table): each sample is a wall whose
 model parameters (COR, PMR, crack height, the diaphragm's frequency, the impact law, ...)
 are drawn from their distributions; every sample runs over the study's walls, diaphragms
-and records, as time histories or, with ``[study.ida]`` beside it, as collapse capacities
-with the lognormal fits per sample and over records and samples together.
+and records, as time histories (the kind ``sampling``) or, with ``[study.ida]`` beside it,
+as collapse capacities with the lognormal fits per sample and over records and samples
+together (the kind ``sampling-ida``).
 
 The table holds ``samples``, ``seed``, optionally ``method`` (``lhs``, ``sobol``,
 ``random``, ``saltelli``) and ``[study.sampling.parameters]``, one inline table per
@@ -14,15 +15,19 @@ is built for every (wall, diaphragm) cell when the study file is loaded: a sampl
 makes no valid wall (a PMR outside (0, 100], or one that leaves no plateau with the wall's
 kappa) is refused then, naming the parameter, and nothing runs.
 
-The cells are (wall, diaphragm, record, sample); the archive has a ``sample`` dimension
-with each sampled value as a coordinate on it (a factor as ``<parameter>_factor``), the
-design's points ``sample_unit(sample, parameter)`` and ``cell_frequency(wall, diaphragm,
-sample)``. A batch is one record and one diaphragm, a group of walls and a block of
-samples of about ``batch_size`` cells (:func:`cut`); its key holds the sampled walls, so a
-cell reruns only when what it computes changes. Time histories give the grid's peak
-outputs and ``status`` per cell; collapse capacities give the IDA kind's per-cell outputs,
-``median_collapse_intensity`` and ``dispersion`` per (wall, diaphragm, sample) over the
-records, and per (wall, diaphragm) the fit over records and samples together
+The cells are (wall, diaphragm, record, sample); the engine cuts them over every dimension,
+``sample`` included, and keys each cell by what decides its result (`urmx.study.cells`):
+a sample by its values, cor and impact law (:func:`identity`), the settings by the IDA
+settings alone. So a design extended by more samples (``sobol`` or ``random`` of the same
+seed keep their first points) reuses the cells of the samples it shares, from the parts or
+from an earlier archive, as a study extended by a wall or a record does. The archive has a
+``sample`` dimension with each sampled value as a coordinate on it (a factor as
+``<parameter>_factor``), the design's points ``sample_unit(sample, parameter)`` and
+``cell_frequency(wall, diaphragm, sample)``. A block of cells runs sample by sample through
+the grid's or the IDA kind's own batch runner (:func:`run_batch`): time histories give the
+grid's peak outputs and ``status`` per cell; collapse capacities give the IDA kind's per-cell
+outputs, ``median_collapse_intensity`` and ``dispersion`` per (wall, diaphragm, sample) over
+the records, and per (wall, diaphragm) the fit over records and samples together
 (``total_median_collapse_intensity``, ``total_dispersion``) with its parts
 (``record_dispersion``, ``model_dispersion``; `urmx.uncertainty.spread`).
 """
@@ -31,15 +36,15 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ... import variables
 from ..batches import Batch
-from ..dataset import NOT_RUN, STATUS, VALID
-from ..parts import task_key
+from ..dataset import NOT_RUN, VALID
+from . import grid, ida
 from .kind import Kind
 
 if TYPE_CHECKING:
@@ -48,30 +53,36 @@ if TYPE_CHECKING:
 DIMS = ("wall", "diaphragm", "record", "sample")
 #: the keys of ``[study.sampling]`` (`urmx.uncertainty.sampler.KEYS`; docs/study-files.md)
 SAMPLING_KEYS = ("samples", "seed", "method", "parameters")
-OUTPUTS = ("status",)  # every batch returns it (capacity batches: collapsed or censored)
-CAPACITY_OUTPUTS = ("capacity", "censored", "analyses", "event_limits", "intensity", "ratio",
-                    "unit", "predominant")
 FIT_OUTPUTS = ("total_median_collapse_intensity", "total_dispersion", "record_dispersion",
                "model_dispersion")
 
 
 @dataclass(frozen=True, eq=False)
 class SamplingSettings:
-    """A sampling study's settings: the design (`urmx.uncertainty.Sampling`), the IDA
-    settings when ``[study.ida]`` sits beside it, and the drawn samples.
+    """A sampling study's settings: the IDA settings when ``[study.ida]`` sits beside the
+    table, and the drawn design.
+
+    Its one field, ``ida``, is what the settings add to every cell's key
+    (`urmx.study.cells`); the draw is keyed sample by sample on the ``sample`` dimension
+    (:func:`identity`), so that two designs share the cells of the samples they share.
 
     Attributes
     ----------
+    sampling : urmx.uncertainty.Sampling
+        The ``[study.sampling]`` table.
     unit : ndarray, shape (samples, parameters)
         The design's points of the unit hypercube. [1]
     values : dict of str to ndarray
         Each parameter's value per sample.
     """
 
-    sampling: Any
     ida: Any = None
-    unit: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    values: dict[str, np.ndarray] = field(default_factory=dict)
+    draw: InitVar[tuple] = None
+
+    def __post_init__(self, draw: tuple) -> None:
+        sampling, unit, values = draw
+        for name, value in (("sampling", sampling), ("unit", unit), ("values", values)):
+            object.__setattr__(self, name, value)
 
     @property
     def size(self) -> int:
@@ -119,11 +130,7 @@ def parse(study: Any) -> SamplingSettings:
     except ParameterError as exc:
         raise _error(study, exc) from None
     _check_grid(study)
-    ida = None
-    if "ida" in study.tables:
-        from .ida import parse as parse_ida
-
-        ida = parse_ida(study)
+    settings = ida.parse(study) if "ida" in study.tables else None
     unit, values = sampling.draw()
     walls = {f"{spec.id!r} on diaphragm {d.id!r}": study.wall(spec, d)
              for spec in study.walls for d in study.diaphragms}
@@ -131,7 +138,7 @@ def parse(study: Any) -> SamplingSettings:
         check_samples(values, walls)
     except ParameterError as exc:
         raise _error(study, exc) from None
-    return SamplingSettings(sampling=sampling, ida=ida, unit=unit, values=values)
+    return SamplingSettings(ida=settings, draw=(sampling, unit, values))
 
 
 def dims(study: Any) -> dict[str, list]:
@@ -140,169 +147,86 @@ def dims(study: Any) -> dict[str, list]:
             "record": study.dims["record"], "sample": list(range(study.settings.size))}
 
 
-def cut(study: Any, batch_size: int) -> list[Batch]:
-    """Batches of one record and one diaphragm: the walls the study pairs with the record
-    in groups, times blocks of at most `batch_size` samples, about `batch_size` cells a
-    batch; records outermost, then diaphragms, walls, samples."""
-    n = study.settings.size
-    per_sample = min(n, batch_size)
-    per_wall = max(1, batch_size // per_sample)
+def _law(study: Any, s: dict[str, Any]) -> tuple[float, str]:
+    """(cor, impact law) a sample runs with: its own where it draws them, else the
+    study's."""
+    return float(s.get("cor", study.cor[0])), str(s.get("impact", study.impact))
+
+
+def identity(study: Any, records: dict) -> dict[str, list]:
+    """What a sample means for a cell's result: its values, cor and impact law (the wall
+    and diaphragm it changes have their own identities)."""
     out = []
-    for ir, rid in enumerate(study.records):
-        walls = [iw for iw, w in enumerate(study.walls) if study.paired(w.id, rid)]
-        for idp in range(len(study.diaphragms)):
-            for i in range(0, len(walls), per_wall):
-                for j in range(0, n, per_sample):
-                    out.append(Batch({"wall": walls[i:i + per_wall], "diaphragm": [idp],
-                                      "record": [ir],
-                                      "sample": list(range(j, min(n, j + per_sample)))}))
-    return out
+    for j in range(study.settings.size):
+        s = study.settings.sample(j)
+        cor, law = _law(study, s)
+        out.append({"values": s, "cor": cor, "impact": law})
+    return {"sample": out}
 
 
-def cell(study: Any, wall: Any, j: int) -> tuple[Any, float, str]:
-    """(the wall, cor and impact law) of sample `j` on the study's wall of a cell."""
+def _walls(study: Any, iw: int, idp: int, samples: list[int]) -> list:
+    """Sample j's wall of the study's (wall, diaphragm) cell, for each j of `samples`."""
     from ...uncertainty import apply
 
-    s = study.settings.sample(j)
-    return apply(wall, s), float(s.get("cor", study.cor[0])), str(s.get("impact", study.impact))
+    base = study.wall(study.walls[iw], study.diaphragms[idp])
+    return [apply(base, study.settings.sample(j)) for j in samples]
 
 
-def tasks(study: Any, records: dict, batch_size: int = 16,
-          kernel: Callable | None = None) -> list[tuple[Batch, dict[str, Any]]]:
-    """Each batch (:func:`cut`) with its task: the cells' sampled walls, cors and impact
-    laws, the record's step and scale factor and the IDA settings (or the tail of a time
-    history); keyed by all of them and the record's samples (`urmx.study.parts.task_key`)."""
-    settings = study.settings
-    ida = settings.ida.to_dict() if settings.ida is not None else None
-    out, first = [], {}
-    for batch in cut(study, batch_size):
-        rec = records[study.records[batch.record]]
-        d = study.diaphragms[batch.diaphragm]
-        cells = [cell(study, study.wall(study.walls[iw], d), j) for iw in batch.walls
-                 for j in batch.block["sample"]]
-        task = dict(walls=[c[0] for c in cells], cor=[c[1] for c in cells],
-                    impact=[c[2] for c in cells], shape=[len(batch.walls),
-                                                         len(batch.block["sample"])],
-                    dt=rec.dt, scale_factor=rec.scale_factor, kernel=kernel, ida=ida)
-        if ida is None:
-            task["tail"] = study.tail
+def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> dict[str, Any]:
+    """One block of cells as one task of the grid's or the IDA kind's runner per sample
+    (plain values, picklable, no xarray)."""
+    b, settings = batch.block, study.settings
+    rec = records[study.records[batch.record]]
+    walls = {(iw, idp): _walls(study, iw, idp, b["sample"]) for iw in b["wall"]
+             for idp in b["diaphragm"]}
+    per_sample = []
+    for n, j in enumerate(b["sample"]):
+        cor, law = _law(study, settings.sample(j))
+        cells = [[walls[iw, idp][n] for idp in b["diaphragm"]] for iw in b["wall"]]
+        if settings.ida is None:
+            per_sample.append(dict(
+                walls=[[[w] for w in row] for row in cells], dt=rec.dt,
+                scale_factor=rec.scale_factor, cor=[cor], scale=[1.0], impact=[law],
+                tail=study.tail, history=[], kernel=kernel,
+                shape=(len(b["wall"]), len(b["diaphragm"]), 1, 1)))
         else:
-            task["predominant"] = first.setdefault(batch.record, batch) is batch
-        batch.key = task_key(task, rec, prefix="sampling-", kind="sampling",
-                             walls=[w.to_dict() for w in task["walls"]])
-        out.append((batch, task))
-    return out
+            per_sample.append(dict(walls=cells, dt=rec.dt, scale_factor=rec.scale_factor,
+                                   record=rec.digest, cor=[cor], impact=law,
+                                   ida=settings.ida.to_dict(), kernel=kernel))
+    return {"samples": per_sample, "ida": settings.ida is not None}
 
 
-# ---- a batch on a worker (numpy only) ----------------------------------------------------------
+# ---- a block on a worker (numpy only) ----------------------------------------------------
 
 def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.ndarray]:
-    """One batch: each cell's time history (the grid's peak outputs and status) or, with IDA
-    settings, its collapse capacity (the IDA kind's outputs), as arrays of shape (walls,
-    samples) (IDA curves (walls, samples, points)). Numpy only."""
-    kernel = task["kernel"]
-    if kernel is None:
-        from ...kernel import run as kernel
-    if task["ida"] is None:
-        return _histories(task, acceleration, kernel)
-    return _capacities(task, acceleration, kernel)
-
-
-def _histories(task: dict, acceleration: np.ndarray, kernel: Callable) -> dict:
-    from .grid import unrun
-
-    shape = tuple(task["shape"])
-    out = unrun(shape)
-    for i, wall in enumerate(task["walls"]):
-        at = np.unravel_index(i, shape)
-        result = kernel(wall, acceleration, task["dt"], scale=task["scale_factor"],
-                        cor=task["cor"][i], impact=task["impact"][i], tail=task["tail"])
-        for name in variables.SCALARS:
-            out[name][at] = result[name]
-        out["status"][at] = STATUS.index(result["status"])
-    return out
-
-
-def _capacities(task: dict, acceleration: np.ndarray, kernel: Callable) -> dict:
-    from ... import fragility
-    from ...records.measures import dominant_frequency
-
-    acc = np.ascontiguousarray(acceleration * task["scale_factor"], dtype=np.float64)
-    ida, walls, dt = task["ida"], task["walls"], task["dt"]
-    unit = fragility.record_intensities(acc, dt, ida["im"], walls)
-    results = [fragility.cell_capacity(
-        kernel, wall, acc, dt, float(unit[i]), ida["im"], task["cor"][i], task["impact"][i],
-        ida["rtol"], ida["step"], ida["max_intensity"]) for i, wall in enumerate(walls)]
-    shape = tuple(task["shape"])
-    k = max(r.analyses for r in results)
-    out = {"capacity": np.array([r.capacity for r in results]).reshape(shape),
-           "censored": np.array([r.censored for r in results]).reshape(shape),
-           "analyses": np.array([r.analyses for r in results], np.int32).reshape(shape),
-           "event_limits": np.array([r.event_limits for r in results],
-                                    np.int32).reshape(shape),
-           "intensity": np.full((len(walls), k), np.nan), "ratio": np.full((len(walls), k),
-                                                                           np.nan),
-           "unit": np.asarray(unit, dtype=np.float64).reshape(shape),
-           "predominant": np.array(dominant_frequency(acc, dt) if task["predominant"]
-                                   else np.nan)}
-    for i, r in enumerate(results):
-        out["intensity"][i, :r.analyses] = r.intensity
-        out["ratio"][i, :r.analyses] = r.instability_ratio
-    out["intensity"] = out["intensity"].reshape(*shape, k)
-    out["ratio"] = out["ratio"].reshape(*shape, k)
-    out["status"] = np.where(out["censored"], STATUS.index("ok"),
-                             STATUS.index("collapsed")).astype(np.int8)
+    """One block, sample by sample through the grid's (time histories) or the IDA kind's
+    (collapse capacities) runner, joined on the sample axis: arrays of the block's shape
+    (IDA curves padded with NaN to the longest). Numpy only."""
+    run = ida.run_batch if task["ida"] else grid.run_batch
+    parts = [run(t, acceleration) for t in task["samples"]]
+    out = {}
+    for name in parts[0]:
+        arrays = [p[name] for p in parts]
+        if arrays[0].ndim > 4:  # an IDA curve: pad its points to the longest
+            k = max(a.shape[4] for a in arrays)
+            arrays = [np.pad(a, [(0, 0)] * 4 + [(0, k - a.shape[4])],
+                             constant_values=np.nan) for a in arrays]
+        out[name] = np.concatenate(arrays, axis=3)
     return out
 
 
 # ---- the Dataset ------------------------------------------------------------------------------
 
-def _on_block(values: np.ndarray, batch: Batch) -> np.ndarray:
-    """A batch's (walls, samples, ...) array on its (wall, diaphragm, record, sample) block."""
-    return values.reshape(values.shape[0], 1, 1, *values.shape[1:])
-
-
-def _shape(study: Any) -> tuple[int, ...]:
-    return tuple(len(v) for v in dims(study).values())
-
-
-def _history_vars(study: Any, tasks: list, results: dict) -> dict[str, xr.Variable]:
+def _history_vars(cells: dict) -> dict[str, xr.Variable]:
     """The grid's peak outputs and status over the cells (NaN where not valid)."""
     import xarray as xr
 
-    from ..dataset import cell_array
-    from .grid import output_attrs
-
-    shape, batches = _shape(study), [b for b, _ in tasks]
-    status = cell_array(shape, batches, results, "status", _on_block, NOT_RUN, np.int8)
+    status = cells["status"]
     invalid = ~np.isin(status, VALID)
-    out = {}
-    for name in variables.SCALARS:
-        values = cell_array(shape, batches, results, name, _on_block)
-        values[invalid] = np.nan
-        out[name] = xr.Variable(DIMS, values, attrs=output_attrs(name))
-    out["status"] = xr.Variable(DIMS, status, attrs=output_attrs("status"))
-    return out
-
-
-def _capacity_cells(study: Any, tasks: list, results: dict) -> dict[str, np.ndarray]:
-    """The per-cell capacity outputs (NaN where not run) and the records' predominant
-    frequencies."""
-    from ..dataset import cell_array
-
-    shape, batches = _shape(study), [b for b, _ in tasks]
-    k = max([results[b.key]["intensity"].shape[-1] for b in batches] or [1])
-    out = {name: cell_array(shape, batches, results, source, _on_block)
-           for name, source in (("collapse_intensity", "capacity"), ("censored", "censored"),
-                                ("analyses", "analyses"), ("event_limits", "event_limits"),
-                                ("record_intensity", "unit"))}
-    for name in ("intensity", "ratio"):
-        out[name] = cell_array((*shape, k), batches, results, name, _on_block)
-    predominant = np.full(shape[2], np.nan)
-    for b in batches:
-        if np.isfinite(results[b.key]["predominant"]):
-            predominant[b.record] = results[b.key]["predominant"]
-    out["predominant_frequency"] = predominant
+    out = {name: xr.Variable(DIMS, np.where(invalid, np.nan,
+                                            cells[name].astype(np.float64)),
+                             attrs=grid.output_attrs(name)) for name in variables.SCALARS}
+    out["status"] = xr.Variable(DIMS, status, attrs=grid.output_attrs("status"))
     return out
 
 
@@ -325,18 +249,21 @@ def _fits(cap: np.ndarray, cen: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-def _capacity_vars(study: Any, cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
+def _capacity_vars(cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
+    """The IDA kind's per-cell outputs over (wall, diaphragm, record, sample) and the fits
+    with modelling uncertainty."""
     import xarray as xr
 
     from ...netcdf import INT_FILL
 
     missing = "NaN where the study's pairs leave the cell out (not run)"
     stored = f"{missing}; stored as int32 with _FillValue {INT_FILL}, read as float64"
-    fits = _fits(cells["collapse_intensity"], cells["censored"])
+    cap, cen = np.asarray(cells["capacity"]), np.asarray(cells["censored"], dtype=np.float64)
+    fits = _fits(cap, cen)
     out = {
-        "collapse_intensity": xr.Variable(DIMS, cells["collapse_intensity"], attrs=attrs(
+        "collapse_intensity": xr.Variable(DIMS, cap, attrs=attrs(
             "collapse_intensity", comment=missing)),
-        "censored": xr.Variable(DIMS, cells["censored"], attrs=attrs(
+        "censored": xr.Variable(DIMS, cen, attrs=attrs(
             "censored", comment=f"1 censored, 0 not; {stored}")),
         "instability_ratio": xr.Variable((*DIMS, "intensity_step"), cells["ratio"], attrs=attrs(
             "instability_ratio", comment="IDA curve: one value per analysis of the cell, "
@@ -345,8 +272,7 @@ def _capacity_vars(study: Any, cells: dict, attrs: Callable) -> dict[str, xr.Var
                                                                      comment=stored)),
         "event_limits": xr.Variable(DIMS, cells["event_limits"],
                                     attrs=attrs("event_limits", comment=stored)),
-        "record_intensity": xr.Variable(DIMS, cells["record_intensity"],
-                                        attrs=attrs("record_intensity")),
+        "record_intensity": xr.Variable(DIMS, cells["unit"], attrs=attrs("record_intensity")),
     }
     for name in ("median_collapse_intensity", "dispersion"):
         out[name] = xr.Variable(("wall", "diaphragm", "sample"), fits[name], attrs=attrs(
@@ -360,12 +286,10 @@ def _capacity_vars(study: Any, cells: dict, attrs: Callable) -> dict[str, xr.Var
 
 def _cell_walls(study: Any, fn: Callable) -> np.ndarray:
     """``fn(wall)`` of every (wall, diaphragm, sample) cell's sampled wall."""
-    out = np.full(_shape(study)[:2] + (study.settings.size,), np.nan)
-    for iw, spec in enumerate(study.walls):
-        for idp, d in enumerate(study.diaphragms):
-            base = study.wall(spec, d)
-            for j in range(study.settings.size):
-                out[iw, idp, j] = fn(cell(study, base, j)[0])
+    n = study.settings.size
+    out = np.full((len(study.walls), len(study.diaphragms), n), np.nan)
+    for iw, idp in np.ndindex(*out.shape[:2]):
+        out[iw, idp] = [fn(w) for w in _walls(study, iw, idp, list(range(n)))]
     return out
 
 
@@ -428,7 +352,7 @@ def _attrs(study: Any, attrs: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def assemble(study: Any, records: dict, tasks: list, results: dict,
+def assemble(study: Any, records: dict, cells: dict, extras: dict,
              attrs: dict[str, Any]) -> xr.Dataset:
     """The Dataset of a sampling study: the cells' outputs over (wall, diaphragm, record,
     sample), the fits with modelling uncertainty (with IDA), and the coordinates."""
@@ -437,28 +361,26 @@ def assemble(study: Any, records: dict, tasks: list, results: dict,
     coords = _coords(study, records)
     settings = study.settings
     if settings.ida is None:
-        data_vars = _history_vars(study, tasks, results)
-    else:
-        from ... import fragility
+        return xr.Dataset(_history_vars(cells), coords=coords, attrs=_attrs(study, attrs))
+    from ... import fragility
 
-        ctx = variables.intensity_context(settings.ida.im)
+    ctx = variables.intensity_context(settings.ida.im)
 
-        def var_attrs(name, **extra):
-            return {**variables.attrs(name, None, **ctx), **extra}
+    def var_attrs(name, **extra):
+        return {**variables.attrs(name, None, **ctx), **extra}
 
-        cells = _capacity_cells(study, tasks, results)
-        data_vars = _capacity_vars(study, cells, var_attrs)
-        coords["intensity_step"] = xr.Variable(
-            "intensity_step", np.arange(cells["intensity"].shape[-1]),
-            attrs=var_attrs("intensity_step"))
-        coords["intensity"] = xr.Variable((*DIMS, "intensity_step"), cells["intensity"],
-                                          attrs=var_attrs("intensity"))
-        coords["rocking_period"] = xr.Variable(("wall", "diaphragm", "sample"), _cell_walls(
-            study, fragility.rocking_period), attrs=var_attrs("rocking_period"))
-        coords["predominant_frequency"] = xr.Variable(
-            "record", cells["predominant_frequency"], attrs=var_attrs(
-                "predominant_frequency", comment="of each record, Konno-Ohmachi smoothed "
-                "(urmx.records.predominant_frequency)"))
+    data_vars = _capacity_vars(cells, var_attrs)
+    coords["intensity_step"] = xr.Variable(
+        "intensity_step", np.arange(cells["intensity"].shape[-1]),
+        attrs=var_attrs("intensity_step"))
+    coords["intensity"] = xr.Variable((*DIMS, "intensity_step"), cells["intensity"],
+                                      attrs=var_attrs("intensity"))
+    coords["rocking_period"] = xr.Variable(("wall", "diaphragm", "sample"), _cell_walls(
+        study, fragility.rocking_period), attrs=var_attrs("rocking_period"))
+    coords["predominant_frequency"] = xr.Variable(
+        "record", np.fmax.reduce(np.asarray(cells["predominant"]), axis=(0, 1, 3)),
+        attrs=var_attrs("predominant_frequency", comment="of each record, Konno-Ohmachi "
+                        "smoothed (urmx.records.predominant_frequency)"))
     return xr.Dataset(data_vars, coords=coords, attrs=_attrs(study, attrs))
 
 
@@ -467,11 +389,18 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
     histories) counts them; None when `ds` has no ``sample`` dimension."""
     if "sample" not in ds.dims:
         return None
-    from . import grid, ida
-
     return ida.counts(ds) if "collapse_intensity" in ds.data_vars else grid.counts(ds)
 
 
-KIND = Kind(name="sampling", table="sampling", combines=("ida",), unit="cells",
-            outputs=OUTPUTS, parse=parse, dims=dims, tasks=tasks, run=run_batch,
-            assemble=assemble, counts=counts, keys=SAMPLING_KEYS)
+#: time histories of every sample: the grid's outputs per cell
+KIND = Kind(name="sampling", table="sampling", unit="analyses", outputs=grid.BATCH_OUTPUTS,
+            parse=parse, dims=dims, identity=identity, task=task, run=run_batch,
+            assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=grid.cell_bytes)
+#: collapse capacities of every sample (``[study.ida]`` beside ``[study.sampling]``): the
+#: IDA kind's outputs per cell
+KIND_IDA = Kind(name="sampling-ida", table="sampling", combines=("ida",), unit="cells",
+                outputs=ida.OUTPUTS, parse=parse, dims=dims, identity=identity, task=task,
+                run=run_batch, assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
+                archived={**ida.ARCHIVED, "unit": "record_intensity"},
+                cell_bytes=ida.cell_bytes)

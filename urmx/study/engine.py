@@ -94,6 +94,7 @@ from .clients import (
     worker_timeout,
 )
 from .dataset import global_attrs
+from .definition import Definition, base, compare
 from .limits import MAX_CELLS, MAX_GB, check_size
 from .parts import Lock, PartStore, batch_key
 from .progress import Progress
@@ -342,6 +343,24 @@ def _resume(store: PartStore, sources: Sources) -> tuple[int, int]:
     return sources.match(found), rejected
 
 
+def _unused_parts(store: PartStore, sources: Sources, cells: Cells) -> list[str]:
+    """What a run says of the parts it found that hold no cell it runs (they are computed
+    again, or not run): computed by another kernel or urmx (the folder's ``code`` stamp
+    differs), or for cells this study no longer has. The folder is stamped with this
+    run's code."""
+    before = store.code(cells.code)
+    unused = len(sources.parts) - np.unique(sources.src[sources.src >= 0]).size
+    if not unused:
+        return []
+    head = f"urmx: {unused} finished part(s) in {store.folder} hold no cell of this run"
+    if before is not None and before != cells.code:
+        changed = ", ".join(f"{k} {before.get(k)} there, {v} now"
+                            for k, v in cells.code.items() if before.get(k) != v)
+        return [f"{head}: they were computed by another kernel ({changed}), so their cells "
+                "are computed again"]
+    return [f"{head} (cells this study no longer has): they are left out"]
+
+
 def _windows(batches: Iterator, size: int) -> Iterator[list]:
     while chunk := list(itertools.islice(batches, size)):
         yield chunk
@@ -433,6 +452,7 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     del _LAST[:-1]
     if store is not None:
         stats.from_parts, stats.rejected = _resume(store, sources)
+        notes = (*notes, *_unused_parts(store, sources, cells))
     if archive is not None:
         try:
             stats.from_archive = take_over(sources, archive[0])
@@ -457,7 +477,8 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
                        f"{str(store.folder)!r}: run again to resume") from None
     finally:
         bar.close()
-    return _assemble(cells, sources, records, global_attrs(study, started, command),
+    attrs = {**global_attrs(study, started, command), "study_definition": base(study, kind)}
+    return _assemble(cells, sources, records, attrs,
                      lazy=store is not None)
 
 
@@ -563,49 +584,64 @@ def _parts_folder(out: str | os.PathLike, inputs: list[tuple[str, Path]] = ()
 
 
 def _earlier_archive(out: Path, study: Study, force: bool, notes: list[str]) -> Any:
-    """The archive already at `out`, opened, when it holds the same study (its cells may
-    be reused); None when there is none or `force` replaces another one.
+    """The archive already at `out`, opened, when it holds the same study, extended or
+    shrunk (`urmx.study.definition`: its cells may be reused); None when there is none or
+    `force` replaces another one.
 
     Raises
     ------
     urmx.errors.OutputError
-        `out` holds another study, or is no urmx study archive, and `force` is False.
+        `out` holds another study (another definition, whatever its name), or is no urmx
+        study archive, and `force` is False.
     """
     if not out.exists():
         return None
     import xarray as xr
 
+    kind = kinds.get(study.kind)
     try:
         ds = xr.open_dataset(out, engine="netcdf4")
     except Exception:  # noqa: BLE001 - whatever it is, it is not an archive to reuse
         ds = None
     name = ds.attrs.get("study_name") if ds is not None else None
-    if name == study.name and "cell_key" not in ds.variables:
-        notes.append(f"urmx: {out} holds no cell keys (written by an older urmx): its "
-                     "cells are computed again")
-    if name == study.name:
+    verdict = None
+    if name is not None:
+        verdict = compare(Definition.of_archive(ds, list(kind.cell_dims(study))),
+                          Definition.of(study, kind))
+    if verdict is not None and verdict.same:
+        if "cell_key" not in ds.variables:
+            notes.append(f"urmx: {out} holds no cell keys (written by an older urmx): its "
+                         "cells are computed again")
+        if verdict.dropped:
+            notes.append(f"urmx: study {study.name!r} leaves out {verdict.dropped_text()} "
+                         f"of the archive {out}: their cells are not kept")
         return ds
     if ds is not None:
         ds.close()
-    what = f"study {name!r}" if name else "no urmx study archive"
+    what = (f"study {name!r} of another definition ({verdict.why})" if verdict is not None
+            else "no urmx study archive")
     if not force:
-        raise OutputError(f"--out {str(out)!r} holds {what}, not study {study.name!r}: "
-                          "give another --out, or --force to replace it")
+        raise OutputError(f"--out {str(out)!r} holds {what}, not study {study.name!r}: its "
+                          "cells would be lost; give another --out, or --force to replace it")
     notes.append(f"urmx: --force: {out} ({what}) is replaced by study {study.name!r}")
     return None
 
 
 def _claim_parts(parts: Path, study: Study, kind: Any, force: bool,
                  notes: list[str]) -> PartStore:
-    """The parts folder of `study`: refused when it holds another study's finished parts,
-    or parts of an urmx from before cells were keyed (they cannot resume, and whose they
-    are is not said), unless `force` removes them."""
+    """The parts folder of `study`: refused when it holds another study's finished parts
+    (another definition, `urmx.study.definition`), or parts of an urmx from before cells
+    were keyed (they cannot resume, and whose they are is not said), unless `force`
+    removes them."""
     store = PartStore(parts, kind.outputs)
     owner, count = store.owner(), store.count()
+    mine = Definition.of(study, kind)
     who = None
-    if count and owner is not None and owner != study.name:
-        who = f"study {owner!r}"
-    elif count and owner is None and store.legacy():
+    if count and owner is not None:
+        verdict = compare(owner, mine)
+        if not verdict.same:
+            who = f"study {owner.name!r} of another definition ({verdict.why})"
+    elif count and store.legacy():
         who = "an older urmx (parts without cell keys, which cannot resume)"
     if who is not None:
         if not force:
@@ -614,9 +650,9 @@ def _claim_parts(parts: Path, study: Study, kind: Any, force: bool,
                            "give another --out, or --force to discard them")
         notes.append(f"urmx: --force: removed {store.clear()} finished part(s) of {who} "
                      f"from {parts}")
-    elif count == 0 and owner != study.name:
+    elif count == 0 and (owner is None or not compare(owner, mine).same):
         store.clear()  # the start time of another study's run that saved nothing
-    store.claim(study.name)
+    store.claim(mine)
     return store
 
 

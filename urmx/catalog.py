@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from .config import data_dir
-from .errors import MissingFileError, UrmxError
+from .errors import MissingFileError, UrmxError, path_argument
 from .model import EFFECTIVE_MASS, RIGID, Wall, effective_diaphragm_mass, effective_wall_mass
 
 if sys.version_info >= (3, 11):
@@ -456,6 +456,7 @@ def read_wall(path: str | os.PathLike) -> Wall:
         Not TOML, an unknown key, a missing or bad field: the message names the file, the
         key and (where it can be found) the line.
     """
+    path_argument("read_wall", "path", path)
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"wall file {str(path)!r} does not exist")
@@ -839,6 +840,7 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     """
     from .study import kinds
 
+    path_argument("load_study", "path", path)
     src = _Source(study_path(path, catalog))
     s = _study_table(src, kinds.tables())
     if catalog is None and "catalog" in s:

@@ -129,6 +129,11 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
                          "tolerance")
     if rtol is not None and not (isinstance(rtol, (int, float)) and 0.0 < rtol < 1.0):
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
+    for name, value in (("scale", scale), ("cor", cor), ("tail", tail), ("dt", dt)):
+        if value is not None and (isinstance(value, bool) or not isinstance(
+                value, (int, float, np.integer, np.floating))):
+            raise InputError(f"simulate: {name}={value!r} must be a number, not "
+                             f"{type(value).__name__}")
     samples, dt, source = _record(ground_acceleration, dt)
     try:
         check_inputs(wall, samples, dt, scale, cor, impact, tail)

@@ -181,9 +181,13 @@ def load_samples(record_id: str, records_dir: str | os.PathLike | None = None, *
     (``data`` in m s-2, ``dt``, ``record`` with the manifest entry's id, set, scale_factor,
     paper_scale_factor and sha256). Same arguments, checks and errors as :func:`load`; the
     file is read once."""
+    from ..errors import InputError
     from .errors import RecordError
     from .readers import read_file, same_channel, stated_by_format
 
+    if not isinstance(record_id, str):
+        raise InputError(f"load: record_id must be a manifest record id (str), got "
+                         f"{record_id!r} ({type(record_id).__name__})")
     base = _records_dir(records_dir)
     e = entry(record_id, base, manifest)
     path = base / e["file"]

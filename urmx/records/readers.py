@@ -196,6 +196,9 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
     """:func:`read` without ObsPy: the checked channels as :class:`Samples` (data in m s-2,
     dt, header fields, provenance). Same arguments, checks and errors as :func:`read`;
     only ObsPy's own formats import ObsPy."""
+    from ..errors import path_argument
+
+    path_argument("read", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual).samples
 
 

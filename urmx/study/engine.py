@@ -71,7 +71,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..catalog import Study, load_study
-from ..errors import InputError, OutputError, RunError, check_output
+from ..errors import InputError, OutputError, RunError, check_output, got
 from ..netcdf import write_netcdf
 from ..provenance import differs
 from . import kinds
@@ -720,6 +720,9 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         for ``urmx.worker-timeout`` seconds or the scheduler gone (`urmx.errors.RunError`).
     """
     refuse_in_worker_import()
+    if not isinstance(study, (Study, str, os.PathLike)):
+        raise InputError(f"run_study: study must be a Study, a study file or a catalog study "
+                         f"name, got {got(study)}")
     _check_batch_size(batch_size)
     check_scheduler(scheduler)
     s = study if isinstance(study, Study) else load_study(study)
@@ -749,6 +752,7 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
         earlier = _earlier_archive(out, study, force, notes)
         try:
             store = _claim_parts(parts, study, kinds.get(study.kind), force, notes)
+            _remove_stale(out, parts, notes)
             records = resolve_records(study, records_dir)
             try:
                 ds = _run(study, records, store, *args,
@@ -770,6 +774,18 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
         raise _kept(exc, parts, "and run the same command again: the archive is written "
                     "from them, nothing is computed again") from None
     shutil.rmtree(parts, ignore_errors=True)
+
+
+def _remove_stale(out: Path, parts: Path, notes: list[str]) -> None:
+    """Remove the temporary files of this archive and its parts that runs killed while
+    writing them left (their PID no longer runs), and say so."""
+    from ..netcdf import remove_stale
+
+    gone = remove_stale(out.parent, f".{out.name}.", ".tmp")
+    gone += remove_stale(parts, ".", ".npz.tmp")
+    for path, pid in gone:
+        notes.append(f"urmx: removed {path}, a temporary file left by a run that was killed "
+                     f"while writing it (pid {pid}, no longer running)")
 
 
 def _write(ds: xr.Dataset, out: Path) -> None:

@@ -91,6 +91,7 @@ from .clients import (
     release,
     run_stamped,
     setting,
+    stop_now,
     worker_timeout,
 )
 from .dataset import global_attrs
@@ -223,6 +224,11 @@ def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str
                 finally:
                     if pending and not owned:
                         release(client, False, [f for f, _ in pending.values()])
+        except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
+            if owned:
+                owned = False
+                stop_now(client)
+            raise
         finally:
             if owned:
                 release(client, True, [])

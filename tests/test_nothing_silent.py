@@ -429,3 +429,48 @@ def _alive(pid: int) -> bool:
         return False
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
+
+
+# ---- an external cluster whose only worker runs an older urmx --------------------------
+
+
+@pytest.mark.slow
+def test_a_worker_with_an_older_urmx_of_the_same_version_is_named_at_once(tmp_path):
+    """The only worker runs a copy of urmx as it was before this issue (its provenance
+    module from the main branch: same version, same kernel sources, no source hash; on
+    main at 834f656 such a worker passed the check and died unpickling a task, and the run
+    said after 68 s only that no worker was left): the run stops before any work, naming
+    the worker as an older urmx."""
+    import shutil
+
+    from .fixtures import cluster as C
+
+    old = subprocess.run(["git", "show", "834f656:urmx/provenance.py"], cwd=ROOT,
+                         capture_output=True, text=True)
+    if old.returncode != 0:
+        pytest.skip("no git history of urmx/provenance.py here")
+    copy = tmp_path / "older"
+    shutil.copytree(ROOT / "urmx", copy / "urmx", ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "urmx" / "provenance.py").write_text(old.stdout)
+    (copy / "urmx" / "study" / "definition.py").unlink()  # a module it did not have
+    study = tmp_path / "cluster.toml"
+    study.write_text(C.STUDY)
+    external = C.Cluster(tmp_path)
+    try:
+        external.start_scheduler()
+        worker = external.add_worker(path=[copy])
+        external.wait_for_workers(1)
+        address = {pid: a for a, pid in external.workers().items()}[worker.pid]
+        out = tmp_path / "older.nc"
+        proc = C.urmx_run(["run", str(study), "--out", str(out), "--scheduler",
+                           external.address, "--batch-size", "1", "--quiet"])
+        _, err = proc.communicate(timeout=120)  # a hang guard, not a timing
+    finally:
+        external.close()
+    lines = err.strip().splitlines() if isinstance(err, str) else \
+        err.decode().strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, lines
+    assert lines[0].startswith(f"urmx run: error: worker {address} runs other code than this "
+                               "process (urmx ")
+    assert "(an older urmx: no source hash)" in lines[0] and "nothing was computed" in lines[0]
+    assert not out.exists()

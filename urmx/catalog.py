@@ -807,6 +807,7 @@ def _values(src: _Source, key: str, value: Any, kind: type) -> list:
 
 def study_path(name: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Path:
     """A study file: a path, or the name of one in ``catalog/studies/`` (``verification``)."""
+    path_argument("study_path", "name", name)
     p = Path(name)
     if p.suffix == ".toml" or p.exists():
         return p

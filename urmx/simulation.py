@@ -47,6 +47,10 @@ def _record(ground_acceleration: Any, dt: float | None) -> tuple[Any, float | No
         ground_acceleration = load_record(ground_acceleration)
     stats = getattr(ground_acceleration, "stats", None)
     if stats is None or not hasattr(ground_acceleration, "data"):
+        from .errors import numbers_argument
+
+        ground_acceleration = numbers_argument("simulate", "ground_acceleration",
+                                               ground_acceleration)
         if dt is None:
             raise InputError("dt is required when ground_acceleration is an array "
                              "(give the record time step in seconds), or pass an ObsPy "

@@ -304,7 +304,7 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
 
 def _counts(name: str, values, shape) -> np.ndarray:
     """Whole-number counts (refusing fractions, NaN and infinities) broadcast to `shape`."""
-    v = np.asarray(values, dtype=float)
+    v = numbers_argument("fit_multiple_stripe", name, values)
     bad = ~np.isfinite(v) | (v != np.round(v))
     if np.any(bad):
         raise InputError(f"{name} must be whole numbers; got {float(v[bad].flat[0])!r}")
@@ -394,7 +394,7 @@ def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = C
         or a collapse fraction that does not rise with intensity.
     """
     resamples = _check_bootstrap(confidence, resamples)
-    x = np.asarray(intensity, dtype=float).ravel()
+    x = numbers_argument("fit_multiple_stripe", "intensity", intensity).ravel()
     n = _counts("analyses", analyses, x.shape)
     z = _counts("collapses", collapses, np.shape(np.asarray(collapses).ravel())).ravel()
     if z.shape != x.shape:

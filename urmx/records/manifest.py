@@ -281,6 +281,9 @@ def index(folder: str | os.PathLike, *, pattern: str = "*", dt: float | None = N
         A file that cannot be read (names it; with ``skip_unknown`` only for files of a
         known format).
     """
+    from ..errors import path_argument
+
+    path_argument("index", "folder", folder)
     from .readers import describe_all, detect_format, stated_by_format
 
     folder = Path(folder)
@@ -357,6 +360,9 @@ def _toml(value) -> str:
 def write_manifest(entries: list[dict], path: str | os.PathLike, comment: str = "") -> Path:
     """Write manifest entries as ``[[record]]`` tables of a TOML file (the schema of
     ``records/manifest.toml``), `comment` as ``#`` lines on top. Returns the path."""
+    from ..errors import path_argument
+
+    path_argument("write_manifest", "path", path)
     path = Path(path)
     lines = [f"# {ln}".rstrip() for ln in comment.splitlines()]
     for e in entries:

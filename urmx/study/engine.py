@@ -7,9 +7,12 @@ How a run goes (:func:`run_study`):
 1. **Size.** The study's cells and its archive's bytes are computed from the sizes of its
    dimensions (`urmx.study.limits`); above the run's limits (``max_cells``, ``max_gb``) it
    stops before any work, with the size and the way on.
-2. **Whose archive.** An existing ``out`` holding another study (its ``study_name``), or no
-   urmx study, is never overwritten without ``force=True``; a parts folder holding another
-   study's finished parts is never emptied without it (the message names both studies).
+2. **Whose archive.** An existing ``out`` holding another study (another definition,
+   `urmx.study.definition`, whatever its name), or no urmx study, is never overwritten
+   without ``force=True``; a parts folder holding another study's finished parts is never
+   emptied without it (the message names both studies and what differs). The same study
+   renamed, extended or shrunk is not another one. Temporary files of this archive and its
+   parts left by killed runs are removed (and said).
 3. **Cells and their keys.** Each cell of the kind's grid has a key, a hash of everything
    that decides its result (`urmx.study.cells`: the wall's parameters, the diaphragm, the
    record's samples and scale factor, the values of every other dimension, the kind's
@@ -540,6 +543,12 @@ def run_grid(study: Study, records: dict, scheduler: Any = "serial", *,
     xarray.Dataset
         The Dataset :func:`run_study` returns without an archive (in memory).
     """
+    if not isinstance(study, Study):
+        raise InputError(f"run_grid: study must be a urmx.catalog.Study (urmx.catalog."
+                         f"load_study), got {got(study)}")
+    if not isinstance(records, dict):
+        raise InputError(f"run_grid: records must be a dict of records by id, got "
+                         f"{got(records)}")
     _check_batch_size(batch_size)
     return _run(study, records, None, scheduler, False, command, batch_size, kernel)
 

@@ -23,6 +23,7 @@ dimension is the same or another, never found extended.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from dataclasses import dataclass, field
@@ -33,17 +34,30 @@ LISTED = 65536
 
 
 def _plain_value(value: Any) -> Any:
-    return value.item() if hasattr(value, "item") else value
+    """A dimension's value as plain Python; a number as a float, so that an archive's
+    int64 or float64 coordinate compares equal to the study's ints or floats."""
+    value = value.item() if hasattr(value, "item") else value
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return value
 
 
 def _canonical(value: Any) -> str:
     return json.dumps(value, sort_keys=True, default=str)
 
 
+def _plain(value: Any) -> Any:
+    """A kind's settings as plain values, as the cells' keys take them
+    (`urmx.study.cells`): its ``to_dict()`` where it has one, a dataclass as its dict."""
+    if callable(getattr(value, "to_dict", None)):
+        return value.to_dict()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.asdict(value)
+    return value
+
+
 def base(study: Any, kind: Any) -> str:
     """The base of a study's definition as canonical JSON (module docstring)."""
-    from .cells import _plain
-
     dims = kind.cell_dims(study)
     return _canonical({"kind": kind.name, "settings": _plain(study.settings),
                        "tail": study.tail,

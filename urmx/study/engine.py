@@ -735,12 +735,9 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
         for ``urmx.worker-timeout`` seconds or the scheduler gone (`urmx.errors.RunError`).
     """
     refuse_in_worker_import()
-    if not isinstance(study, (Study, str, os.PathLike)):
-        raise InputError(f"run_study: study must be a Study, a study file or a catalog study "
-                         f"name, got {got(study)}")
     _check_batch_size(batch_size)
     check_scheduler(scheduler)
-    s = study if isinstance(study, Study) else load_study(study)
+    s = _study(study)
     check_size(s, kinds.get(s.kind), max_cells, max_gb)
     parts = None
     if out is not None:  # an input never becomes the output
@@ -754,6 +751,16 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     from .archive import open_study
 
     return open_study(out)
+
+
+def _study(study: Any) -> Study:
+    """A loaded study, a study file or a catalog study name, as a loaded study."""
+    if isinstance(study, Study):
+        return study
+    if not isinstance(study, (str, os.PathLike)):
+        raise InputError(f"run_study: study must be a Study, a study file or a catalog study "
+                         f"name, got {got(study)}")
+    return load_study(study)
 
 
 def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir: Any,

@@ -64,7 +64,7 @@ def _terminate(signum, frame) -> None:
     raise Terminated
 
 
-def _again(command: str):
+def _again(command: str, out: str | None = None):
     """The handler of Ctrl-C and SIGTERM in the ``urmx`` command: the first raises
     (KeyboardInterrupt, `Terminated`), so the command stops its cluster and says what is
     kept; any further one ends the process at once, its worker processes killed, with one
@@ -73,20 +73,27 @@ def _again(command: str):
         _STOPS.append(signum)
         if len(_STOPS) == 1:
             raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
-        _exit_now(command, signum)
+        _exit_now(command, signum, out)
 
     return handler
 
 
-def _exit_now(command: str, signum: int) -> None:
-    """End the process now: kill its worker processes, say so in one line, exit with
-    128 + the signal's number."""
+def _exit_now(command: str, signum: int, out: str | None = None) -> None:
+    """End the process now: kill its worker processes, say so in one line (with the
+    finished batches kept for `out`, counted on disk now: only this process writes them,
+    and it writes no more), exit with 128 + the signal's number."""
     from .study.clients import end_quietly
 
     with contextlib.suppress(BaseException):
         end_quietly()
         what = "SIGTERM" if signum == signal.SIGTERM else "Ctrl-C"
-        sys.stderr.write(f"urmx {command}: {what} again: stopped at once\n")
+        note = ""
+        if out is not None:
+            from .commands.study import _kept
+
+            note = _kept(Path(out))
+        sys.stderr.write(f"urmx {command}: {what} again: stopped at once"
+                         + (f"; {note}" if note else "") + "\n")
         sys.stderr.flush()
     os._exit(128 + signum)
 
@@ -100,7 +107,7 @@ def _end(code: int) -> None:
 
 
 @contextlib.contextmanager
-def _sigterm_stops(command: str | None = None):
+def _sigterm_stops(command: str | None = None, out: str | None = None):
     """While a command runs (in the main thread), SIGTERM raises :class:`Terminated`; in
     the ``urmx`` command itself (`command` given) a second Ctrl-C or SIGTERM ends it at
     once (:func:`_again`)."""
@@ -108,9 +115,9 @@ def _sigterm_stops(command: str | None = None):
         yield
         return
     if command is not None:  # kept until the process ends: it ends with the command
-        signal.signal(signal.SIGTERM, _again(command))
+        signal.signal(signal.SIGTERM, _again(command, out))
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-            signal.signal(signal.SIGINT, _again(command))
+            signal.signal(signal.SIGINT, _again(command, out))
         yield
         return
     previous = signal.signal(signal.SIGTERM, _terminate)
@@ -130,7 +137,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     command = args.command if argv is None else None  # the urmx command itself
     try:
-        with _sigterm_stops(command):
+        out = getattr(args, "out", None)
+        with _sigterm_stops(command, out if isinstance(out, str) and out.endswith(".nc")
+                            else None):
             records = getattr(args, "records", None)
             if records is not None and not Path(records).expanduser().is_dir():
                 raise MissingFileError(f"--records {records!r}: no such folder")

@@ -13,6 +13,7 @@ from types import ModuleType
 
 import numpy as np
 
+from urmx.errors import InputError
 from urmx.markdown import table
 
 from . import sections as registry
@@ -52,7 +53,7 @@ def resolve(names: list[str], paper: bool = False) -> list[str]:
         elif n in known:
             picked = [n]
         else:
-            raise ValueError(f"unknown benchmark {n!r} (known: all, render, "
+            raise InputError(f"unknown benchmark {n!r} (known: all, render, "
                              f"{', '.join([*registry.GROUPS, *known])})")
         out += [p for p in picked if p not in out]
     if paper and "grid_scaling" in out and "paper" not in out:
@@ -157,7 +158,7 @@ def run_sections(names: list[str], out: str | os.PathLike = "reports/performance
     modules = by_name()
     for n in names:
         if n not in modules:
-            raise ValueError(f"unknown benchmark section {n!r} (known: {', '.join(modules)})")
+            raise InputError(f"unknown benchmark section {n!r} (known: {', '.join(modules)})")
     for n in names:
         t = time.perf_counter()
         echo(f"urmx bench: {n} ...")

@@ -496,23 +496,51 @@ def test_a_changed_record_file_is_computed_again(make_study, own_records, tmp_pa
 
 def test_an_archive_of_another_study_is_refused_then_replaced_with_force(make_study,
                                                                          own_records, tmp_path):
+    """Issue 34, rule 1: an archive belongs to a study definition, not a name. The same
+    study renamed reuses every cell; a study of the same name with other walls (walls s08,
+    s18 there, s14 here: a copy of the file, edited) is refused, the archive untouched, and
+    replaces it only with force."""
     out = tmp_path / "own.nc"
     calls: list = []
     _run_own(_own(make_study), out, own_records, calls)
+    renamed = _run_own(_own(make_study, name="renamed"), out, own_records, calls)
+    assert renamed.attrs["study_name"] == "renamed" and len(calls) == 24  # none again
+    assert st.last_run().from_archive == 24
     before = out.read_bytes()
-    other = _own(make_study, name="another")
+    other = _own(make_study, walls=("s14",))
     calls.clear()
-    with pytest.raises(OutputError, match=r"holds study 'own', not study 'another'.*--force"):
+    with pytest.raises(OutputError, match=r"holds study 'renamed' of another definition "
+                       r"\(wall s08, s18 there, s14 here\), not study 'own': its cells would "
+                       r"be lost.*--force"):
         _run_own(other, out, own_records, calls)
     assert calls == [] and out.read_bytes() == before
     assert not (tmp_path / "own.nc.parts").exists()
     ds = _run_own(other, out, own_records, calls, force=True)
-    assert ds.attrs["study_name"] == "another" and len(calls) == 24  # nothing reused
+    assert list(ds.wall.values) == ["s14"] and len(calls) == 12  # nothing reused
     # a file that is no urmx archive is not overwritten either
     stranger = tmp_path / "data.nc"
     xr.Dataset({"x": ("t", [1.0, 2.0])}).to_netcdf(stranger)
     with pytest.raises(OutputError, match="holds no urmx study archive, not study 'own'"):
         _run_own(_own(make_study), stranger, own_records, calls)
+
+
+def test_an_own_study_shrunk_keeps_working_and_says_what_it_leaves_out(
+        make_study, own_records, tmp_path):
+    """Rule 1: one's own study shrunk by a wall and extended by a record (each dimension's
+    values hold the others or are held by them) is the same study: its cells are taken
+    over and the run says which cells it leaves out."""
+    out = tmp_path / "own.nc"
+    calls: list = []
+    _run_own(_own(make_study), out, own_records, calls)
+    calls.clear()
+    ds, said = _quiet_run(_own(make_study, walls=("s18",),
+                               records=("rec1", "rec2", "rec3", "rec4")),
+                          out=out, records_dir=own_records, kernel=_counting(calls),
+                          scheduler="serial")
+    assert (st.last_run().from_archive, st.last_run().computed) == (12, 4)
+    assert list(ds.wall.values) == ["s18"] and len(calls) == 4
+    assert f"urmx: study 'own' leaves out wall s08 of the archive {out}: their cells are " \
+           "not kept" in said
 
 
 def test_parts_of_another_study_are_kept_unless_forced(make_study, own_records, tmp_path):
@@ -524,9 +552,10 @@ def test_parts_of_another_study_are_kept_unless_forced(make_study, own_records, 
                      kernel=_counting(calls, 9), scheduler="serial", progress=False)
     kept = sorted(p.name for p in parts.glob("*.npz"))
     assert len(kept) == 4
-    other = _own(make_study, name="another")
-    with pytest.raises(RunError, match=r"holds 4 finished part\(s\) of study 'own', not of "
-                                       r"study 'another'.*--force"):
+    other = _own(make_study, walls=("s14",))  # same name, another definition
+    with pytest.raises(RunError, match=r"holds 4 finished part\(s\) of study 'own' of another "
+                                       r"definition \(wall s08, s18 there, s14 here\), not of "
+                                       r"study 'own'.*--force"):
         _run_own(other, out, own_records, calls)
     assert sorted(p.name for p in parts.glob("*.npz")) == kept  # nothing deleted
     err = io.StringIO()
@@ -535,7 +564,8 @@ def test_parts_of_another_study_are_kept_unless_forced(make_study, own_records, 
         _run_own(other, out, own_records, calls, force=True, progress=True)
     finally:
         sys.stderr = saved
-    assert f"--force: removed 4 finished part(s) of study 'own' from {parts}" in err.getvalue()
+    assert "--force: removed 4 finished part(s) of study 'own' of another definition (wall " \
+           f"s08, s18 there, s14 here) from {parts}" in err.getvalue()
 
 
 def test_the_command_line_refuses_another_study_and_replaces_it_with_force(
@@ -543,7 +573,7 @@ def test_the_command_line_refuses_another_study_and_replaces_it_with_force(
     from urmx.cli import main
 
     out = tmp_path / "cli.nc"
-    first, other = _own(make_study), _own(make_study, name="another")
+    first, other = _own(make_study), _own(make_study, walls=("s14",), name="another")
     common = ["--records", str(own_records), "--scheduler", "serial", "--quiet"]
     assert main(["run", str(first), "--out", str(out), *common]) == 0
     capsys.readouterr()

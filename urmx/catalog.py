@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from .config import data_dir
-from .errors import MissingFileError, UrmxError
+from .errors import MissingFileError, UrmxError, path_argument
 from .model import EFFECTIVE_MASS, RIGID, Wall, effective_diaphragm_mass, effective_wall_mass
 
 if sys.version_info >= (3, 11):
@@ -456,6 +456,7 @@ def read_wall(path: str | os.PathLike) -> Wall:
         Not TOML, an unknown key, a missing or bad field: the message names the file, the
         key and (where it can be found) the line.
     """
+    path_argument("read_wall", "path", path)
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"wall file {str(path)!r} does not exist")
@@ -763,6 +764,9 @@ def _range(src: _Source, key: str, value: dict) -> list[float]:
     start, stop, step = (float(value[k]) for k in ("start", "stop", "step"))
     if step <= 0:
         raise src.error(key, "range step must be positive", needle)
+    if start > stop:
+        raise src.error(key, f"range start={start:g} is above stop={stop:g}: a range runs "
+                        "upwards from start to stop (swap them)", needle)
     count = (stop - start) / step + 1e-9
     if not count < MAX_VALUES:  # inf and NaN too
         raise src.error(key, f"range start={start:g}, stop={stop:g}, step={step:g} makes "
@@ -803,6 +807,7 @@ def _values(src: _Source, key: str, value: Any, kind: type) -> list:
 
 def study_path(name: str | os.PathLike, catalog: str | os.PathLike | None = None) -> Path:
     """A study file: a path, or the name of one in ``catalog/studies/`` (``verification``)."""
+    path_argument("study_path", "name", name)
     p = Path(name)
     if p.suffix == ".toml" or p.exists():
         return p
@@ -836,6 +841,7 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     """
     from .study import kinds
 
+    path_argument("load_study", "path", path)
     src = _Source(study_path(path, catalog))
     s = _study_table(src, kinds.tables())
     if catalog is None and "catalog" in s:
@@ -863,7 +869,8 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     tail = s.get("tail", 0.0)
     if not _number(tail) or tail < 0:
         raise src.error("study.tail", f"{tail!r} must be a finite duration >= 0 [s]", "tail")
-    study = Study(name=s.get("name", src.path.stem), title=s.get("title", s.get("name", "")),
+    name = _study_name(src, s)
+    study = Study(name=name, title=s.get("title", s.get("name", "")),
                   path=src.path, text=src.text, catalog=cat, walls=walls,
                   diaphragms=diaphragms, supports=supports, records=records, cor=cor,
                   extra=extra, impact=impact, tail=float(tail),
@@ -875,6 +882,16 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     _check_cells(src, study)
     study.kind, study.settings = kinds.prepare(study)
     return study
+
+
+def _study_name(src: _Source, s: dict) -> str:
+    """The study's name (default: the file's stem): a string that is not blank, as archives
+    name their study by it (``study_name``)."""
+    name = s.get("name", src.path.stem)
+    if not isinstance(name, str) or not name.strip():
+        raise src.error("study.name", f"{name!r} is not a name (give a word that names the "
+                        "study: archives and reports are labelled with it)", "name")
+    return name
 
 
 def _study_table(src: _Source, tables: tuple[str, ...]) -> dict:

@@ -57,14 +57,67 @@ class Terminated(KeyboardInterrupt):
     terminated run cleans up as an interrupted one does (its parts kept)."""
 
 
+_STOPS: list[int] = []  # the Ctrl-C and SIGTERM received while a command runs
+
+
 def _terminate(signum, frame) -> None:
     raise Terminated
 
 
+def _again(command: str, out: str | None = None):
+    """The handler of Ctrl-C and SIGTERM in the ``urmx`` command: the first raises
+    (KeyboardInterrupt, `Terminated`), so the command stops its cluster and says what is
+    kept; any further one ends the process at once, its worker processes killed, with one
+    line and no traceback (nothing of atexit either)."""
+    def handler(signum, frame) -> None:
+        _STOPS.append(signum)
+        if len(_STOPS) == 1:
+            raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+        _exit_now(command, signum, out)
+
+    return handler
+
+
+def _exit_now(command: str, signum: int, out: str | None = None) -> None:
+    """End the process now: kill its worker processes, say so in one line (with the
+    finished batches kept for `out`, counted on disk now: only this process writes them,
+    and it writes no more), exit with 128 + the signal's number."""
+    from .study.clients import end_quietly
+
+    with contextlib.suppress(BaseException):
+        end_quietly()
+        what = "SIGTERM" if signum == signal.SIGTERM else "Ctrl-C"
+        note = ""
+        if out is not None:
+            from .commands.study import _kept
+
+            note = _kept(Path(out))
+        sys.stderr.write(f"urmx {command}: {what} again: stopped at once"
+                         + (f"; {note}" if note else "") + "\n")
+        sys.stderr.flush()
+    os._exit(128 + signum)
+
+
+def _end(code: int) -> None:
+    """End the process now with `code` (no atexit: see `main`)."""
+    if "urmx.study.clients" in sys.modules:
+        with contextlib.suppress(BaseException):
+            sys.modules["urmx.study.clients"].end_quietly()
+    os._exit(code)
+
+
 @contextlib.contextmanager
-def _sigterm_stops():
-    """While a command runs (in the main thread), SIGTERM raises :class:`Terminated`."""
+def _sigterm_stops(command: str | None = None, out: str | None = None):
+    """While a command runs (in the main thread), SIGTERM raises :class:`Terminated`; in
+    the ``urmx`` command itself (`command` given) a second Ctrl-C or SIGTERM ends it at
+    once (:func:`_again`)."""
     if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    if command is not None:  # kept until the process ends: it ends with the command
+        signal.signal(signal.SIGTERM, _again(command, out))
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, _again(command, out))
         yield
         return
     previous = signal.signal(signal.SIGTERM, _terminate)
@@ -82,8 +135,11 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "handler", None):
         parser.print_help()
         return 2
+    command = args.command if argv is None else None  # the urmx command itself
     try:
-        with _sigterm_stops():
+        out = getattr(args, "out", None)
+        with _sigterm_stops(command, out if isinstance(out, str) and out.endswith(".nc")
+                            else None):
             records = getattr(args, "records", None)
             if records is not None and not Path(records).expanduser().is_dir():
                 raise MissingFileError(f"--records {records!r}: no such folder")
@@ -94,6 +150,10 @@ def main(argv: list[str] | None = None) -> int:
             ("interrupted", 130)
         print(f"urmx {args.command}: {what}" + (f"; {note}" if note else ""),
               file=sys.stderr)
+        if command is not None:  # its cluster is stopped, its parts saved: nothing is left
+            sys.stdout.flush()  # to do, and dask's atexit handlers must not wait or speak
+            sys.stderr.flush()
+            _end(code)
         return code
     except UrmxError as exc:  # bad input or a run that cannot proceed: one line
         print(f"urmx {args.command}: error: {exc}", file=sys.stderr)

@@ -17,6 +17,7 @@ import contextlib
 import os
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 
 class UrmxError(Exception):
@@ -137,5 +138,41 @@ def writing(path: str | os.PathLike, what: str = "output"):
     except UrmxError:
         raise
     except OSError as exc:
+        import errno
+
         reason = exc.strerror or str(exc)
+        if exc.errno == errno.EFBIG:
+            reason += " (this process's file-size limit, ulimit -f: raise it)"
         raise OutputError(f"cannot write {what} {str(path)!r}: {reason}") from exc
+
+
+def got(value: Any) -> str:
+    """What an argument got, for a message: its repr (cut to 60 characters) and type."""
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def path_argument(function: str, name: str, value: Any) -> None:
+    """Refuse an argument that should name a file (a str or path) with an `InputError`
+    naming the function, the argument and what it got."""
+    if not isinstance(value, (str, os.PathLike)):
+        raise InputError(f"{function}: {name} must be a file name (str or path), got "
+                         f"{got(value)}")
+
+
+def numbers_argument(function: str, name: str, value: Any) -> Any:
+    """`value` as a float array, or an `InputError` naming the function, the argument and
+    what it got (strings are refused even when they would parse: ``'False'`` is not 0)."""
+    import numpy as np
+
+    try:
+        arr = np.asarray(value)
+        if arr.dtype.kind in "USVM" or (arr.dtype.kind == "O" and any(
+                isinstance(v, (str, bytes)) for v in arr.ravel())):
+            raise TypeError
+        return arr.astype(float)
+    except (TypeError, ValueError):
+        raise InputError(f"{function}: {name} must be numbers (array_like of float), got "
+                         f"{got(value)}") from None

@@ -79,12 +79,71 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         # RuntimeError ("NetCDF: HDF error"), and a full disk as often as not as EACCES:
         # the space left is said with the reason
         reason = getattr(exc, "strerror", None) or str(exc)
+        limit = size_limit_hit(tmp, exc)
         raise OutputError(f"cannot write netCDF file {str(path)!r}: {reason} "
-                          f"({_free(path.parent)})") from exc
+                          f"({limit or _free(path.parent)})") from exc
     finally:
         with contextlib.suppress(OSError):
             tmp.unlink()
     return path
+
+
+def size_limit_hit(path: Path, exc: BaseException | None = None) -> str:
+    """Words for a write that failed on the process's file-size limit (``ulimit -f``,
+    RLIMIT_FSIZE: EFBIG, the signal SIGXFSZ that Python ignores), '' when it did not: the
+    error says EFBIG, or the file reached the limit (netCDF says only ``HDF error``)."""
+    import errno
+
+    try:
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    except (ImportError, OSError, ValueError):  # pragma: no cover - not POSIX
+        return ""
+    if limit == resource.RLIM_INFINITY:
+        return ""
+    try:
+        size = path.stat().st_size
+    except OSError:
+        size = 0
+    efbig = any(getattr(e, "errno", None) == errno.EFBIG for e in (exc, getattr(
+        exc, "__cause__", None), getattr(exc, "__context__", None)) if e is not None)
+    if not efbig and size < limit - min(1 << 20, limit // 10):
+        return ""
+    return (f"the file reached this process's file-size limit of {limit / 1e6:.1f} MB "
+            "(ulimit -f): raise it (ulimit -f unlimited) or write elsewhere")
+
+
+def remove_stale(folder: Path, prefix: str, suffix: str) -> list[tuple[Path, int]]:
+    """Remove the temporary files ``<prefix><pid><suffix>`` in `folder` that a killed
+    process left (its PID no longer runs); (file, pid) of each removed. Used for an
+    archive's ``.NAME.nc.PID.tmp`` and a parts folder's ``.KEY.PID.npz.tmp``."""
+    import glob
+
+    removed = []
+    if not folder.is_dir():
+        return removed
+    for tmp in folder.glob(glob.escape(prefix) + "*" + glob.escape(suffix)):
+        pid = tmp.name[len(prefix):len(tmp.name) - len(suffix)].rsplit(".", 1)[-1]
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+            removed.append((tmp, int(pid)))
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    """Whether a process `pid` runs (one of another user counts)."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
 
 
 def _free(folder: Path) -> str:

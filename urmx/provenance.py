@@ -7,7 +7,8 @@ version, with a local label naming the git commit (``0.1.0+g7ab99c0``, ``.dirty`
 the package's files differ from it) when urmx runs from a git checkout. :func:`attrs` are
 an archive's provenance attributes (:data:`ATTRS` names them). :func:`identity` is what a
 worker reports of itself, and :func:`differs` says whether a worker's results can be mixed
-with this process's (same urmx version, same kernel sources, same numpy).
+with this process's (same urmx version, same sources of the whole package, :func:`source_hash`,
+so an older urmx of the same version is caught too, same kernel sources, same numpy).
 
 Only the standard library is imported here (versions are read from the installed
 packages' metadata), so a worker that runs a batch can report its identity cheaply.
@@ -16,6 +17,7 @@ packages' metadata), so a worker that runs a batch can report its identity cheap
 from __future__ import annotations
 
 import functools
+import hashlib
 import subprocess
 import sys
 from importlib import metadata
@@ -25,7 +27,7 @@ from typing import Any
 #: libraries whose versions an archive records, as their distributions are named
 PACKAGES = ("numba", "numpy", "scipy", "xarray", "dask", "distributed", "netCDF4", "obspy")
 #: the entries of :func:`identity` that must be equal for results to be mixed
-COMPARED = ("urmx", "kernel_source", "numpy")
+COMPARED = ("urmx", "sources", "kernel_source", "numpy")
 #: the global attributes :func:`attrs` gives an archive
 ATTRS = ("urmx_version", "urmx_git_commit", "urmx_git_dirty", "kernel_source_hash",
          "python_version", *(f"{p.lower()}_version" for p in PACKAGES))
@@ -82,12 +84,28 @@ def code_version() -> str:
 
 
 @functools.lru_cache(maxsize=1)
+def source_hash() -> str:
+    """16 hex digits of the SHA-256 of urmx's own files (each ``.py`` and ``.toml`` of the
+    package, with its path in it): two processes with the same hash run the same code,
+    whatever their version says (an older checkout of the same version has another)."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*")):
+        if path.suffix in (".py", ".toml") and "__pycache__" not in path.parts:
+            h.update(path.relative_to(root).as_posix().encode() + b"\0")
+            h.update(path.read_bytes() + b"\0")
+    return h.hexdigest()[:16]
+
+
+@functools.lru_cache(maxsize=1)
 def identity() -> dict[str, str]:
-    """What this process runs: the urmx version, `urmx.jitcache.SOURCE_HASH`, and the
-    numba, numpy and Python versions (a worker reports it with every batch)."""
+    """What this process runs: the urmx version, :func:`source_hash`,
+    `urmx.jitcache.SOURCE_HASH`, and the numba, numpy and Python versions (a worker reports
+    it with every batch)."""
     from . import __version__, jitcache
 
-    return {"urmx": __version__, "kernel_source": jitcache.SOURCE_HASH,
+    return {"urmx": __version__, "sources": source_hash(),
+            "kernel_source": jitcache.SOURCE_HASH,
             "numpy": package_version("numpy"), "numba": package_version("numba"),
             "python": sys.version.split()[0]}
 
@@ -99,9 +117,12 @@ def differs(theirs: dict[str, Any], ours: dict[str, Any] | None = None) -> bool:
 
 
 def describe(ident: dict[str, Any]) -> str:
-    """An identity in a few words: ``urmx 0.1.0, kernel 1a2b3c4d5e6f7a8b, numpy 2.4.6``."""
-    return (f"urmx {ident.get('urmx', '?')}, kernel {ident.get('kernel_source', '?')}, "
-            f"numpy {ident.get('numpy', '?')}")
+    """An identity in a few words: ``urmx 0.1.0 (sources 0a1b2c3d4e5f6a7b), kernel
+    1a2b3c4d5e6f7a8b, numpy 2.4.6``; an urmx that reports no source hash is older."""
+    sources = ident.get("sources")
+    said = f"sources {sources}" if sources else "an older urmx: no source hash"
+    return (f"urmx {ident.get('urmx', '?')} ({said}), kernel "
+            f"{ident.get('kernel_source', '?')}, numpy {ident.get('numpy', '?')}")
 
 
 def attrs() -> dict[str, Any]:

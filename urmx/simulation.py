@@ -47,6 +47,10 @@ def _record(ground_acceleration: Any, dt: float | None) -> tuple[Any, float | No
         ground_acceleration = load_record(ground_acceleration)
     stats = getattr(ground_acceleration, "stats", None)
     if stats is None or not hasattr(ground_acceleration, "data"):
+        from .errors import numbers_argument
+
+        ground_acceleration = numbers_argument("simulate", "ground_acceleration",
+                                               ground_acceleration)
         if dt is None:
             raise InputError("dt is required when ground_acceleration is an array "
                              "(give the record time step in seconds), or pass an ObsPy "
@@ -129,6 +133,11 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
                          "tolerance")
     if rtol is not None and not (isinstance(rtol, (int, float)) and 0.0 < rtol < 1.0):
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
+    for name, value in (("scale", scale), ("cor", cor), ("tail", tail), ("dt", dt)):
+        if value is not None and (isinstance(value, bool) or not isinstance(
+                value, (int, float, np.integer, np.floating))):
+            raise InputError(f"simulate: {name}={value!r} must be a number, not "
+                             f"{type(value).__name__}")
     samples, dt, source = _record(ground_acceleration, dt)
     try:
         check_inputs(wall, samples, dt, scale, cor, impact, tail)

@@ -165,6 +165,7 @@ def _paper(args) -> int:
     from ..paper import STUDIES
     from ..report import write_report
     from ..study import check_scheduler, close_client, get_client, run_study
+    from ..study.clients import stop_now
 
     out = check_output(args.out, "--out", folder=True)
     check_output(args.report, "--report", folder=True)
@@ -185,6 +186,11 @@ def _paper(args) -> int:
                 progress=not args.quiet, batch_size=args.batch_size,
                 records_dir=args.records, command=command_line(), **size_arguments(args)))
             archives.append(path)
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
+        if owned:
+            owned = False
+            stop_now(client)
+        raise
     finally:
         if owned:
             close_client(client)

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, numbers_argument
 
 CONFIDENCE = 0.90  # two-sided level of the bootstrap intervals [1]
 RESAMPLES = 1000  # bootstrap resamples of a fit
@@ -207,19 +207,20 @@ def bootstrap_lognormal(capacities, censored=None, resamples: int = RESAMPLES,
     (ndarray, ndarray)
         Shape ``(resamples,)`` each. [units of the intensity], [1]
     """
-    x, cen = _capacities(capacities, censored)
+    x, cen = _capacities(capacities, censored, "bootstrap_lognormal")
     y = np.log(x)
     rng = np.random.default_rng(seed)
     w = rng.multinomial(y.size, np.full(y.size, 1.0 / y.size), size=int(resamples))
     return _lognormal_mle(y, cen, w.astype(float))
 
 
-def _capacities(capacities, censored) -> tuple[np.ndarray, np.ndarray]:
+def _capacities(capacities, censored, function: str = "fit_lognormal"
+                ) -> tuple[np.ndarray, np.ndarray]:
     """The capacities that are there and their censored flags (refusing what the module
     docstring lists)."""
-    x = np.asarray(capacities, dtype=float).ravel()
+    x = numbers_argument(function, "capacities", capacities).ravel()
     raw = (np.zeros(x.shape) if censored is None
-           else np.asarray(censored, dtype=float).ravel())
+           else numbers_argument(function, "censored", censored).ravel())
     if raw.shape != x.shape:
         raise InputError(f"censored has {raw.size} entries, capacities {x.size}")
     if np.any(np.isinf(x)):
@@ -303,7 +304,7 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
 
 def _counts(name: str, values, shape) -> np.ndarray:
     """Whole-number counts (refusing fractions, NaN and infinities) broadcast to `shape`."""
-    v = np.asarray(values, dtype=float)
+    v = numbers_argument("fit_multiple_stripe", name, values)
     bad = ~np.isfinite(v) | (v != np.round(v))
     if np.any(bad):
         raise InputError(f"{name} must be whole numbers; got {float(v[bad].flat[0])!r}")
@@ -393,7 +394,7 @@ def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = C
         or a collapse fraction that does not rise with intensity.
     """
     resamples = _check_bootstrap(confidence, resamples)
-    x = np.asarray(intensity, dtype=float).ravel()
+    x = numbers_argument("fit_multiple_stripe", "intensity", intensity).ravel()
     n = _counts("analyses", analyses, x.shape)
     z = _counts("collapses", collapses, np.shape(np.asarray(collapses).ravel())).ravel()
     if z.shape != x.shape:
@@ -449,8 +450,8 @@ def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]
     (ndarray, ndarray)
         ``analyses`` and ``collapses`` per level.
     """
-    x, c = _capacities(capacities, censored)
-    lv = np.asarray(levels, dtype=float).ravel()
+    x, c = _capacities(capacities, censored, "stripe_counts")
+    lv = numbers_argument("stripe_counts", "levels", levels).ravel()
     known = ~c[None, :] | (lv[:, None] <= x[None, :])
     collapsed = ~c[None, :] & (x[None, :] <= lv[:, None])
     return known.sum(axis=1), collapsed.sum(axis=1)

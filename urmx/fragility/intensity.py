@@ -75,6 +75,9 @@ def check_im(im: str) -> None:
 def sa_avg_range(wall: Wall) -> tuple[float, float]:
     """The default period range of ``sa_avg`` for a wall (module docstring):
     ``[max(min(T_d, T_r) / sqrt 2, T_r / 2), sqrt 2 max(T_d, T_r)]``. [s]"""
+    from .mechanism import wall_argument
+
+    wall_argument("sa_avg_range", wall)
     tr, td = rocking_period(wall), diaphragm_period(wall)
     return (max(min(td, tr) / SA_AVG_WIDEN, SA_AVG_FLOOR * tr), SA_AVG_WIDEN * max(td, tr))
 
@@ -125,7 +128,9 @@ def record_intensities(acceleration, dt: float, im: str, walls,
     """`record_intensity` of one record's samples [m s-2] at time step `dt` [s] for several
     walls at once (one pass of the response spectrum over all their periods), numpy only.
     [units of the measure]"""
-    acc = np.asarray(acceleration, dtype=float)
+    from ..errors import numbers_argument
+
+    acc = numbers_argument("record_intensities", "acceleration", acceleration)
     if im == "scale":
         return np.ones(len(walls))
     if im == "pga":
@@ -143,7 +148,9 @@ def record_measures(acceleration, dt: float, walls, period_range=None) -> dict[s
     """Every measure of `RECORD_IMS` of one record's samples [m s-2] at step `dt` [s] for
     several walls, in one pass of the response spectrum over all their periods, numpy
     only: measure -> array over `walls`. [units of each measure]"""
-    acc = np.asarray(acceleration, dtype=float)
+    from ..errors import numbers_argument
+
+    acc = numbers_argument("record_measures", "acceleration", acceleration)
     avg = np.array([sa_avg_periods(w, period_range) for w in walls]).reshape(len(walls), -1)
     own = np.array([[rocking_period(w), diaphragm_period(w)] for w in walls]).reshape(-1, 2)
     uniq, inv = np.unique(np.concatenate([own.ravel(), avg.ravel()]), return_inverse=True)

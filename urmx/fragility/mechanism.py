@@ -21,6 +21,14 @@ from ..model import RIGID, Wall
 DESIGN_FRACTION = 0.6  # effective period at this fraction of the instability rotation
 
 
+def wall_argument(function: str, wall: object) -> None:
+    """Refuse a `wall` that is not a `urmx.Wall`, naming the function and what it got."""
+    if not isinstance(wall, Wall):
+        from ..errors import InputError, got
+
+        raise InputError(f"{function}: wall must be a urmx.Wall, got {got(wall)}")
+
+
 def trilinear(segment, theta: float) -> float:
     """Trilinear resistance R(theta) of a segment case (`urmx.Wall.segment`; MODEL.md
     section 3): linear to ``theta_a``, the plateau ``Mi`` to ``theta_b``, then softening to
@@ -73,6 +81,7 @@ def rocking_period(wall: Wall) -> float:
         mechanism's inertia and ``R`` its restoring moment (both segments' trilinear
         resistances, MODEL.md section 3). [s]
     """
+    wall_argument("rocking_period", wall)
     inertia, _, restoring, theta_ins, _ = pinned_mechanism(wall)
     theta_d = DESIGN_FRACTION * theta_ins
     return 2.0 * math.pi * math.sqrt(inertia * theta_d / restoring(theta_d))
@@ -84,6 +93,7 @@ def static_acceleration(wall: Wall) -> float:
 
     The restoring moment is piecewise linear in theta1, so its peak lies at a corner of
     one of the two trilinear curves (or at the instability rotation)."""
+    wall_argument("static_acceleration", wall)
     _, coupling, restoring, theta_ins, pinned = pinned_mechanism(wall)
     k = pinned.a1 / pinned.a2
     lower, upper = pinned.segment(2), pinned.segment(1)
@@ -93,5 +103,6 @@ def static_acceleration(wall: Wall) -> float:
 
 def diaphragm_period(wall: Wall) -> float:
     """Period of the top support, ``1 / wall.diaphragm_frequency("top")``; 0 when rigid. [s]"""
+    wall_argument("diaphragm_period", wall)
     f = wall.diaphragm_frequency("top")
     return 0.0 if math.isinf(f) else 1.0 / f

@@ -164,6 +164,9 @@ def read_hazard(path: str | os.PathLike) -> HazardCurve:
         A header without measure or units, an unknown measure or units, a row that is not
         two numbers, intensities that do not rise or rates that do not fall.
     """
+    from ..errors import path_argument
+
+    path_argument("read_hazard", "path", path)
     path = Path(path)
     header, rows = _read_rows(path, "hazard curve")
     (im, units), (rname, runits) = header
@@ -225,6 +228,11 @@ def collapse_rate(fit, hazard, years: float = YEARS) -> CollapseRisk:
     CollapseRisk
         ``rate`` [1/yr], ``probability`` [1] in `years`, ``tail_share`` [1].
     """
+    if not (hasattr(fit, "median") and hasattr(fit, "dispersion")):
+        from ..errors import got
+
+        raise InputError(f"collapse_rate: fit must be a fragility with median and dispersion "
+                         f"(urmx.fragility.fit_lognormal), got {got(fit)}")
     try:
         years = float(years)
     except (TypeError, ValueError):
@@ -292,6 +300,9 @@ def read_spectrum(path: str | os.PathLike) -> DesignSpectrum:
         A bad header, a row that is not two numbers, periods that do not rise, a Sa that is
         not positive.
     """
+    from ..errors import path_argument
+
+    path_argument("read_spectrum", "path", path)
     path = Path(path)
     header, rows = _read_rows(path, "design spectrum")
     (pname, punits), (sname, sunits) = header

@@ -181,9 +181,13 @@ def load_samples(record_id: str, records_dir: str | os.PathLike | None = None, *
     (``data`` in m s-2, ``dt``, ``record`` with the manifest entry's id, set, scale_factor,
     paper_scale_factor and sha256). Same arguments, checks and errors as :func:`load`; the
     file is read once."""
+    from ..errors import InputError
     from .errors import RecordError
     from .readers import read_file, same_channel, stated_by_format
 
+    if not isinstance(record_id, str):
+        raise InputError(f"load: record_id must be a manifest record id (str), got "
+                         f"{record_id!r} ({type(record_id).__name__})")
     base = _records_dir(records_dir)
     e = entry(record_id, base, manifest)
     path = base / e["file"]
@@ -277,6 +281,9 @@ def index(folder: str | os.PathLike, *, pattern: str = "*", dt: float | None = N
         A file that cannot be read (names it; with ``skip_unknown`` only for files of a
         known format).
     """
+    from ..errors import path_argument
+
+    path_argument("index", "folder", folder)
     from .readers import describe_all, detect_format, stated_by_format
 
     folder = Path(folder)
@@ -353,6 +360,9 @@ def _toml(value) -> str:
 def write_manifest(entries: list[dict], path: str | os.PathLike, comment: str = "") -> Path:
     """Write manifest entries as ``[[record]]`` tables of a TOML file (the schema of
     ``records/manifest.toml``), `comment` as ``#`` lines on top. Returns the path."""
+    from ..errors import path_argument
+
+    path_argument("write_manifest", "path", path)
     path = Path(path)
     lines = [f"# {ln}".rstrip() for ln in comment.splitlines()]
     for e in entries:

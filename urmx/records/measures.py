@@ -47,6 +47,11 @@ def as_trace(record):
 def _series(trace):
     """(acceleration, dt) of a trace: a positive time step [s] and finite samples, or an
     error naming the trace (and the first NaN sample's index)."""
+    if not (hasattr(trace, "stats") and hasattr(trace, "data")):
+        from ..errors import got
+
+        raise InputError(f"trace must be an obspy Trace (urmx.records.read, load), got "
+                         f"{got(trace)}")
     dt = float(trace.stats.delta)
     if not (np.isfinite(dt) and dt > 0):
         raise InputError(f"trace {trace.id!r} has time step {dt!r} s; it must be positive")
@@ -280,14 +285,19 @@ def sdof_displacement(acc, dt: float, period: float, damping: float = 0.05) -> n
 
     Exact for piecewise-linear ``acc`` [m s-2] sampled at ``dt`` [s]; starts at rest.
     """
+    from ..errors import numbers_argument
+
     damping = _check_damping(damping)
+    p = numbers_argument("sdof_displacement", "acc", acc)
+    dt, period = (float(numbers_argument("sdof_displacement", n, v))
+                  for n, v in (("dt", dt), ("period", period)))
     if not (np.isfinite(dt) and dt > 0):
         raise InputError(f"dt={dt!r} must be a positive time step in seconds")
     if not (np.isfinite(period) and period > 0):
         raise InputError(f"period={period!r} must be a positive period in seconds")
     omega = np.array([2.0 * np.pi / period])
     coef = nigam_jennings_coefficients(omega, damping, dt)
-    p = -check_finite(acc, "acc", dt)
+    p = -check_finite(p, "acc", dt)
     return _nj_run(p, coef, omega, float(damping), True)[3][:, 0]
 
 

@@ -13,6 +13,17 @@ from ..errors import InputError
 from .readers import STANDARD_GRAVITY, check_finite
 
 
+def _trace(trace):
+    """`trace` when it is an obspy Trace, else an `urmx.errors.InputError` naming the
+    argument and what it got."""
+    if hasattr(trace, "stats") and hasattr(trace, "data") and hasattr(trace, "copy"):
+        return trace
+    from ..errors import InputError, got
+
+    raise InputError(f"trace must be an obspy Trace (urmx.records.read, load), got "
+                     f"{got(trace)}")
+
+
 def baseline(trace, order: int = 0):
     """Remove the mean (``order=0``) or a polynomial baseline of ``order`` (ObsPy ``detrend``).
 
@@ -23,7 +34,7 @@ def baseline(trace, order: int = 0):
     order : int
         0 removes the mean, 1 a straight line, higher a polynomial. [1]
     """
-    tr = trace.copy()
+    tr = _trace(trace).copy()
     if order == 0:
         tr.detrend("demean")
     elif order == 1:
@@ -35,7 +46,7 @@ def baseline(trace, order: int = 0):
 
 def taper(trace, fraction: float = 0.05):
     """Cosine (Hann) taper of ``fraction`` of the record at each end. [1]"""
-    tr = trace.copy()
+    tr = _trace(trace).copy()
     tr.taper(max_percentage=fraction, type="hann")
     return tr
 
@@ -55,7 +66,7 @@ def bandpass(trace, freqmin: float = 0.1, freqmax: float = 25.0, corners: int = 
     zerophase : bool
         Run forwards and backwards (no phase shift).
     """
-    tr = trace.copy()
+    tr = _trace(trace).copy()
     nyquist = 0.5 / tr.stats.delta
     tr.filter("bandpass", freqmin=freqmin, freqmax=min(freqmax, 0.95 * nyquist),
               corners=corners, zerophase=zerophase)
@@ -64,7 +75,7 @@ def bandpass(trace, freqmin: float = 0.1, freqmax: float = 25.0, corners: int = 
 
 def resample(trace, dt: float):
     """Resample to time step ``dt`` [s] (anti-aliased, ObsPy ``resample``/``interpolate``)."""
-    tr = trace.copy()
+    tr = _trace(trace).copy()
     if np.isclose(tr.stats.delta, dt, rtol=1e-9):
         return tr
     if dt > tr.stats.delta:
@@ -82,9 +93,9 @@ def scale(trace, factor: float | None = None, target_pga: float | None = None):
     obspy.Trace
         The scaled copy; ``stats.scale_factor`` holds the factor applied.
     """
+    tr = _trace(trace).copy()
     if (factor is None) == (target_pga is None):
         raise InputError("scale: give exactly one of factor= or target_pga=")
-    tr = trace.copy()
     pga = float(np.max(np.abs(check_finite(tr.data, f"scale: trace {tr.id!r}",
                                            tr.stats.delta))))
     if target_pga is not None:

@@ -196,6 +196,9 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
     """:func:`read` without ObsPy: the checked channels as :class:`Samples` (data in m s-2,
     dt, header fields, provenance). Same arguments, checks and errors as :func:`read`;
     only ObsPy's own formats import ObsPy."""
+    from ..errors import path_argument
+
+    path_argument("read", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual).samples
 
 
@@ -205,6 +208,9 @@ def read_channel(path: str | os.PathLike, format: str | None = None, dt: float |
     """One channel of a record file as :class:`Samples`: `channel`, or the file's only
     one; a multi-channel file without `channel` is a :class:`ChannelError` listing its
     channels (never a silent first channel). Otherwise as :func:`read_samples`."""
+    from ..errors import path_argument
+
+    path_argument("read_channel", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual, one=True).samples[0]
 
 
@@ -308,6 +314,9 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
     RecordError, urmx.errors.MissingFileError
         As :func:`read`.
     """
+    from ..errors import path_argument
+
+    path_argument("describe", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, channel, allow_unusual,
                                      one=True))[0]
 
@@ -316,6 +325,9 @@ def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str 
                  format: str | None = None, allow_unusual: bool = False) -> list[RecordFile]:
     """Every channel of a record file as a :class:`RecordFile`, reading the file once (same
     arguments and errors as :func:`describe`)."""
+    from ..errors import path_argument
+
+    path_argument("describe_all", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, None, allow_unusual))
 
 
@@ -369,6 +381,9 @@ def detect_format(path: str | os.PathLike, *, allow_unusual: bool = False) -> st
     UnusualRecordError
         A file larger than `MAX_RECORD_BYTES` that is none of urmx's text formats.
     """
+    from ..errors import path_argument
+
+    path_argument("detect_format", "path", path)
     return _sniff(Path(path), allow_unusual)[0]
 
 
@@ -1258,7 +1273,9 @@ def check_finite(data, label: str = "record", dt: float | None = None,
     Use it wherever samples arrive from outside (a Trace, an array): a NaN must be named as
     such, never taken for a zero.
     """
-    values = np.asarray(data, dtype=float)
+    from ..errors import numbers_argument
+
+    values = numbers_argument(label, "samples", data)
     bad = ~np.isfinite(values)
     if bad.any():
         k = int(np.argmax(bad))

@@ -6,10 +6,11 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from .. import variables
-from ..errors import MissingFileError
+from ..errors import InputError, MissingFileError
 from . import kinds
 
 
@@ -26,10 +27,18 @@ def open_study(path: str | os.PathLike, chunks: Any = None, keys: bool = False) 
     masked here by the kind they belong to (each kind's ``reopen``; a grid's by
     ``status``, for example).
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"open_study: path={path!r} must be a file name (str or path), not "
+                         f"{type(path).__name__}")
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"no study archive {str(path)!r}")
-    ds = xr.open_dataset(path, engine="netcdf4", chunks={} if chunks is None else chunks)
+    try:
+        ds = _guarded(xr.open_dataset(path, engine="netcdf4"), path)
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise InputError(f"{str(path)!r} is not a readable study archive: {exc}") from None
+    if chunks:
+        ds = ds.chunk(chunks)
     if not keys and "cell_key" in ds.variables:
         ds = ds.drop_vars("cell_key")
     if not any(n in ds.data_vars and ds[n].dtype.kind in "iub"
@@ -40,3 +49,44 @@ def open_study(path: str | os.PathLike, chunks: Any = None, keys: bool = False) 
         if masked is not None:
             return masked
     return ds
+
+
+class _Guarded:
+    """One variable of an open archive, read slice by slice: a file damaged since it was
+    written (a flipped bit in a compressed chunk) is an `urmx.errors.InputError` naming the
+    file and the variable when it is read, not a bare ``OSError: NetCDF: HDF error``."""
+
+    def __init__(self, var: xr.Variable, path: Path, name: str):
+        self.var, self.path, self.name = var, path, name
+        self.shape, self.dtype, self.ndim = var.shape, var.dtype, var.ndim
+
+    def __getitem__(self, key: Any) -> Any:
+        try:
+            return self.var[key].values
+        except (OSError, RuntimeError) as exc:
+            raise InputError(f"study archive {str(self.path)!r}: variable {self.name!r} cannot "
+                             f"be read ({exc}): the file is damaged; run its study again") \
+                from None
+
+
+def _guarded(ds: xr.Dataset, path: Path) -> xr.Dataset:
+    """`ds` (opened lazily, without dask) with every variable but the indexes a dask array
+    in the file's own chunks, read through :class:`_Guarded`."""
+    import uuid
+
+    import dask.array as da
+
+    tag = uuid.uuid4().hex
+    new = {}
+    for name, var in ds.variables.items():
+        if name in ds.indexes:
+            continue
+        chunks = tuple(var.encoding.get("chunksizes") or var.shape)
+        data = da.from_array(_Guarded(var, path, name), chunks=chunks, lock=False,
+                             name=f"urmx-archive-{name}-{tag}", meta=np.empty((0,) * var.ndim,
+                                                                              var.dtype))
+        new[name] = var.copy(deep=False, data=data)
+    out = ds.copy()
+    coords = {n: v for n, v in new.items() if n in ds.coords}
+    data_vars = {n: v for n, v in new.items() if n not in ds.coords}
+    return out.assign_coords(coords).assign(data_vars)

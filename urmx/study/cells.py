@@ -125,6 +125,8 @@ class Cells:
                 "dims": self.names, "kernel": kernel_name(kernel), "urmx": __version__,
                 "kernel_source": jitcache.SOURCE_HASH}
         self.base = np.array([digest64(base)], dtype=np.uint64)
+        #: the code the cells are computed by (in their keys; a parts folder's ``code``)
+        self.code = {k: base[k] for k in ("kernel", "kernel_source", "urmx")}
         self.extras = self._extras()
         self.record_axis = self.names.index("record")
         self._pairs: np.ndarray | None = None

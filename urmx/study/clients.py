@@ -476,6 +476,65 @@ def close_client(client: Any) -> None:
         logging.disable(previous)
 
 
+#: seconds a run stopped by Ctrl-C or SIGTERM gives the cluster it started to close, before
+#: it kills the worker processes still alive
+STOP_TIMEOUT = 10.0
+
+
+def stop_now(client: Any, timeout: float = STOP_TIMEOUT) -> None:
+    """After Ctrl-C or SIGTERM: close `client` and the local cluster it started within
+    `timeout` seconds, saying nothing (dask's messages stay off for the rest of the
+    process: closed comms and futures scheduled after shutdown are no news to someone who
+    stopped the run); the worker processes still alive then, or when a further Ctrl-C
+    comes meanwhile, are killed."""
+    import multiprocessing
+
+    logging.disable(logging.CRITICAL)  # for good: the process is ending
+    workers = multiprocessing.active_children()
+    done = threading.Event()
+
+    def close() -> None:
+        try:
+            client.close(timeout=timeout)
+            cluster = getattr(client, "cluster", None)
+            if cluster is not None:
+                cluster.close(timeout=timeout)
+        except BaseException:  # noqa: BLE001,S110 - whatever it says, the workers go below
+            pass
+        finally:
+            done.set()
+
+    threading.Thread(target=close, name="urmx-stop", daemon=True).start()
+    try:
+        done.wait(timeout)
+    finally:  # a further Ctrl-C while waiting: kill at once
+        kill_workers(workers)
+
+
+def kill_workers(workers: list | None = None) -> None:
+    """Kill (SIGKILL) the worker processes this process started that are still alive
+    (default: every child of `multiprocessing`); they hold no result that is not saved."""
+    import multiprocessing
+
+    for proc in workers if workers is not None else multiprocessing.active_children():
+        with contextlib.suppress(Exception):
+            if proc.is_alive():
+                proc.kill()
+
+
+def end_quietly() -> None:
+    """Before the process ends at once (``os._exit``): kill its worker processes and
+    multiprocessing's resource tracker, which would otherwise print a warning about the
+    semaphores of the killed workers after urmx's last line."""
+    kill_workers()
+    with contextlib.suppress(Exception):
+        from multiprocessing import resource_tracker
+
+        pid = getattr(resource_tracker._resource_tracker, "_pid", None)
+        if pid:
+            os.kill(pid, signal.SIGKILL)
+
+
 def record_samples(acceleration: np.ndarray) -> np.ndarray:
     """A record's samples as a dask task: held by one worker and fetched by the others;
     when that worker is lost, the scheduler computes it again from this task (scattered

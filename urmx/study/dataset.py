@@ -89,11 +89,36 @@ def _wall_coords(study: Any) -> dict[str, xr.Variable]:
     }
 
 
+def reference_wall(catalog: Any) -> Any:
+    """The wall a diaphragm's ``frequency`` is given for: the median (by slenderness) of the
+    catalog's parametric walls (``s16`` in urmx's catalog), None when it has none. It is
+    the catalog's, never the study's: a label never depends on the other cells."""
+    specs = sorted((w for w in catalog.walls.values() if w.parametric),
+                   key=lambda w: w.slenderness)
+    return specs[len(specs) // 2] if specs else None
+
+
+def diaphragm_frequency(study: Any, diaphragm: Any) -> float:
+    """The indicative frequency of a diaphragm, its own property (Table IV footnote: an SDOF
+    of its stiffness over the building's diaphragm mass plus half the mass of
+    :func:`reference_wall`; the diaphragm mass alone when the catalog has no parametric
+    wall), whatever walls the study runs on it. [Hz]"""
+    spec = reference_wall(study.catalog)
+    if diaphragm.rigid:
+        return math.inf
+    if not diaphragm.stiffness_value > 0:  # a specimen's own supports: no diaphragm
+        return math.nan
+    if spec is None:
+        return math.sqrt(diaphragm.stiffness_value / study.catalog.building.diaphragm_mass) / (
+            2.0 * math.pi)
+    return study.catalog.building.wall(spec, diaphragm, "top", 0.0) \
+        .diaphragm_frequency("top")
+
+
 def _diaphragm_coords(study: Any) -> dict[str, xr.Variable]:
     specimen = study.specimen
     cells = [[study.wall(s, d) for d in study.diaphragms] for s in study.walls]
     cell_freq = np.array([[w.diaphragm_frequency("top") for w in row] for row in cells])
-    median = len(study.walls) // 2
     md = study.catalog.building.diaphragm_mass
     nan_if = (lambda value: math.nan if specimen else value)  # noqa: E731
     coords = {
@@ -102,7 +127,7 @@ def _diaphragm_coords(study: Any) -> dict[str, xr.Variable]:
         "stiffness": coord("stiffness", "diaphragm", np.array(
             [nan_if(d.stiffness_value) for d in study.diaphragms])),
         "frequency": coord("frequency", "diaphragm", np.array(
-            [nan_if(cell_freq[median, i]) for i in range(len(study.diaphragms))])),
+            [nan_if(diaphragm_frequency(study, d)) for d in study.diaphragms])),
         "cell_frequency": coord("cell_frequency", ("wall", "diaphragm"), cell_freq),
         "diaphragm_mass": coord("diaphragm_mass", "diaphragm", np.array(
             [nan_if(md) for _ in study.diaphragms])),

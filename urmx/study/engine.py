@@ -7,9 +7,12 @@ How a run goes (:func:`run_study`):
 1. **Size.** The study's cells and its archive's bytes are computed from the sizes of its
    dimensions (`urmx.study.limits`); above the run's limits (``max_cells``, ``max_gb``) it
    stops before any work, with the size and the way on.
-2. **Whose archive.** An existing ``out`` holding another study (its ``study_name``), or no
-   urmx study, is never overwritten without ``force=True``; a parts folder holding another
-   study's finished parts is never emptied without it (the message names both studies).
+2. **Whose archive.** An existing ``out`` holding another study (another definition,
+   `urmx.study.definition`, whatever its name), or no urmx study, is never overwritten
+   without ``force=True``; a parts folder holding another study's finished parts is never
+   emptied without it (the message names both studies and what differs). The same study
+   renamed, extended or shrunk is not another one. Temporary files of this archive and its
+   parts left by killed runs are removed (and said).
 3. **Cells and their keys.** Each cell of the kind's grid has a key, a hash of everything
    that decides its result (`urmx.study.cells`: the wall's parameters, the diaphragm, the
    record's samples and scale factor, the values of every other dimension, the kind's
@@ -71,7 +74,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..catalog import Study, load_study
-from ..errors import InputError, OutputError, RunError, check_output
+from ..errors import InputError, OutputError, RunError, check_output, got
 from ..netcdf import write_netcdf
 from ..provenance import differs
 from . import kinds
@@ -91,9 +94,11 @@ from .clients import (
     release,
     run_stamped,
     setting,
+    stop_now,
     worker_timeout,
 )
 from .dataset import global_attrs
+from .definition import Definition, base, compare
 from .limits import MAX_CELLS, MAX_GB, check_size
 from .parts import Lock, PartStore, batch_key
 from .progress import Progress
@@ -222,6 +227,11 @@ def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str
                 finally:
                     if pending and not owned:
                         release(client, False, [f for f, _ in pending.values()])
+        except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
+            if owned:
+                owned = False
+                stop_now(client)
+            raise
         finally:
             if owned:
                 release(client, True, [])
@@ -342,6 +352,24 @@ def _resume(store: PartStore, sources: Sources) -> tuple[int, int]:
     return sources.match(found), rejected
 
 
+def _unused_parts(store: PartStore, sources: Sources, cells: Cells) -> list[str]:
+    """What a run says of the parts it found that hold no cell it runs (they are computed
+    again, or not run): computed by another kernel or urmx (the folder's ``code`` stamp
+    differs), or for cells this study no longer has. The folder is stamped with this
+    run's code."""
+    before = store.code(cells.code)
+    unused = len(sources.parts) - np.unique(sources.src[sources.src >= 0]).size
+    if not unused:
+        return []
+    head = f"urmx: {unused} finished part(s) in {store.folder} hold no cell of this run"
+    if before is not None and before != cells.code:
+        changed = ", ".join(f"{k} {before.get(k)} there, {v} now"
+                            for k, v in cells.code.items() if before.get(k) != v)
+        return [f"{head}: they were computed by another kernel ({changed}), so their cells "
+                "are computed again"]
+    return [f"{head} (cells this study no longer has): they are left out"]
+
+
 def _windows(batches: Iterator, size: int) -> Iterator[list]:
     while chunk := list(itertools.islice(batches, size)):
         yield chunk
@@ -433,6 +461,7 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     del _LAST[:-1]
     if store is not None:
         stats.from_parts, stats.rejected = _resume(store, sources)
+        notes = (*notes, *_unused_parts(store, sources, cells))
     if archive is not None:
         try:
             stats.from_archive = take_over(sources, archive[0])
@@ -457,7 +486,8 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
                        f"{str(store.folder)!r}: run again to resume") from None
     finally:
         bar.close()
-    return _assemble(cells, sources, records, global_attrs(study, started, command),
+    attrs = {**global_attrs(study, started, command), "study_definition": base(study, kind)}
+    return _assemble(cells, sources, records, attrs,
                      lazy=store is not None)
 
 
@@ -513,6 +543,12 @@ def run_grid(study: Study, records: dict, scheduler: Any = "serial", *,
     xarray.Dataset
         The Dataset :func:`run_study` returns without an archive (in memory).
     """
+    if not isinstance(study, Study):
+        raise InputError(f"run_grid: study must be a urmx.catalog.Study (urmx.catalog."
+                         f"load_study), got {got(study)}")
+    if not isinstance(records, dict):
+        raise InputError(f"run_grid: records must be a dict of records by id, got "
+                         f"{got(records)}")
     _check_batch_size(batch_size)
     return _run(study, records, None, scheduler, False, command, batch_size, kernel)
 
@@ -563,49 +599,64 @@ def _parts_folder(out: str | os.PathLike, inputs: list[tuple[str, Path]] = ()
 
 
 def _earlier_archive(out: Path, study: Study, force: bool, notes: list[str]) -> Any:
-    """The archive already at `out`, opened, when it holds the same study (its cells may
-    be reused); None when there is none or `force` replaces another one.
+    """The archive already at `out`, opened, when it holds the same study, extended or
+    shrunk (`urmx.study.definition`: its cells may be reused); None when there is none or
+    `force` replaces another one.
 
     Raises
     ------
     urmx.errors.OutputError
-        `out` holds another study, or is no urmx study archive, and `force` is False.
+        `out` holds another study (another definition, whatever its name), or is no urmx
+        study archive, and `force` is False.
     """
     if not out.exists():
         return None
     import xarray as xr
 
+    kind = kinds.get(study.kind)
     try:
         ds = xr.open_dataset(out, engine="netcdf4")
     except Exception:  # noqa: BLE001 - whatever it is, it is not an archive to reuse
         ds = None
     name = ds.attrs.get("study_name") if ds is not None else None
-    if name == study.name and "cell_key" not in ds.variables:
-        notes.append(f"urmx: {out} holds no cell keys (written by an older urmx): its "
-                     "cells are computed again")
-    if name == study.name:
+    verdict = None
+    if name is not None:
+        verdict = compare(Definition.of_archive(ds, list(kind.cell_dims(study))),
+                          Definition.of(study, kind))
+    if verdict is not None and verdict.same:
+        if "cell_key" not in ds.variables:
+            notes.append(f"urmx: {out} holds no cell keys (written by an older urmx): its "
+                         "cells are computed again")
+        if verdict.dropped:
+            notes.append(f"urmx: study {study.name!r} leaves out {verdict.dropped_text()} "
+                         f"of the archive {out}: their cells are not kept")
         return ds
     if ds is not None:
         ds.close()
-    what = f"study {name!r}" if name else "no urmx study archive"
+    what = (f"study {name!r} of another definition ({verdict.why})" if verdict is not None
+            else "no urmx study archive")
     if not force:
-        raise OutputError(f"--out {str(out)!r} holds {what}, not study {study.name!r}: "
-                          "give another --out, or --force to replace it")
+        raise OutputError(f"--out {str(out)!r} holds {what}, not study {study.name!r}: its "
+                          "cells would be lost; give another --out, or --force to replace it")
     notes.append(f"urmx: --force: {out} ({what}) is replaced by study {study.name!r}")
     return None
 
 
 def _claim_parts(parts: Path, study: Study, kind: Any, force: bool,
                  notes: list[str]) -> PartStore:
-    """The parts folder of `study`: refused when it holds another study's finished parts,
-    or parts of an urmx from before cells were keyed (they cannot resume, and whose they
-    are is not said), unless `force` removes them."""
+    """The parts folder of `study`: refused when it holds another study's finished parts
+    (another definition, `urmx.study.definition`), or parts of an urmx from before cells
+    were keyed (they cannot resume, and whose they are is not said), unless `force`
+    removes them."""
     store = PartStore(parts, kind.outputs)
     owner, count = store.owner(), store.count()
+    mine = Definition.of(study, kind)
     who = None
-    if count and owner is not None and owner != study.name:
-        who = f"study {owner!r}"
-    elif count and owner is None and store.legacy():
+    if count and owner is not None:
+        verdict = compare(owner, mine)
+        if not verdict.same:
+            who = f"study {owner.name!r} of another definition ({verdict.why})"
+    elif count and store.legacy():
         who = "an older urmx (parts without cell keys, which cannot resume)"
     if who is not None:
         if not force:
@@ -614,9 +665,9 @@ def _claim_parts(parts: Path, study: Study, kind: Any, force: bool,
                            "give another --out, or --force to discard them")
         notes.append(f"urmx: --force: removed {store.clear()} finished part(s) of {who} "
                      f"from {parts}")
-    elif count == 0 and owner != study.name:
+    elif count == 0 and (owner is None or not compare(owner, mine).same):
         store.clear()  # the start time of another study's run that saved nothing
-    store.claim(study.name)
+    store.claim(mine)
     return store
 
 
@@ -686,7 +737,7 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     refuse_in_worker_import()
     _check_batch_size(batch_size)
     check_scheduler(scheduler)
-    s = study if isinstance(study, Study) else load_study(study)
+    s = _study(study)
     check_size(s, kinds.get(s.kind), max_cells, max_gb)
     parts = None
     if out is not None:  # an input never becomes the output
@@ -702,6 +753,16 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     return open_study(out)
 
 
+def _study(study: Any) -> Study:
+    """A loaded study, a study file or a catalog study name, as a loaded study."""
+    if isinstance(study, Study):
+        return study
+    if not isinstance(study, (str, os.PathLike)):
+        raise InputError(f"run_study: study must be a Study, a study file or a catalog study "
+                         f"name, got {got(study)}")
+    return load_study(study)
+
+
 def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir: Any,
                   *args: Any) -> None:
     """Run `study` into the archive `out` (its lock held): check whose archive and parts
@@ -713,6 +774,7 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
         earlier = _earlier_archive(out, study, force, notes)
         try:
             store = _claim_parts(parts, study, kinds.get(study.kind), force, notes)
+            _remove_stale(out, parts, notes)
             records = resolve_records(study, records_dir)
             try:
                 ds = _run(study, records, store, *args,
@@ -734,6 +796,18 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
         raise _kept(exc, parts, "and run the same command again: the archive is written "
                     "from them, nothing is computed again") from None
     shutil.rmtree(parts, ignore_errors=True)
+
+
+def _remove_stale(out: Path, parts: Path, notes: list[str]) -> None:
+    """Remove the temporary files of this archive and its parts that runs killed while
+    writing them left (their PID no longer runs), and say so."""
+    from ..netcdf import remove_stale
+
+    gone = remove_stale(out.parent, f".{out.name}.", ".tmp")
+    gone += remove_stale(parts, ".", ".npz.tmp")
+    for path, pid in gone:
+        notes.append(f"urmx: removed {path}, a temporary file left by a run that was killed "
+                     f"while writing it (pid {pid}, no longer running)")
 
 
 def _write(ds: xr.Dataset, out: Path) -> None:

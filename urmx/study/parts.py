@@ -17,6 +17,7 @@ from __future__ import annotations
 import ast
 import datetime as _dt
 import hashlib
+import json
 import os
 import zipfile
 from collections.abc import Callable, Iterator
@@ -25,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RunError, writing
+from .definition import Definition
 
 
 def kernel_name(kernel: Callable | None) -> str | None:
@@ -56,15 +58,35 @@ class PartStore:
             stamp.write_text(now + "\n")
         return now
 
-    def owner(self) -> str | None:
-        """The name of the study whose parts the folder holds (None: not said)."""
+    def owner(self) -> Definition | None:
+        """The definition of the study whose parts the folder holds (None: not said; only
+        a name: written by an older urmx)."""
         stamp = self.folder / "study"
-        return stamp.read_text(encoding="utf-8").strip() if stamp.is_file() else None
+        if not stamp.is_file():
+            return None
+        text = stamp.read_text(encoding="utf-8").strip()
+        try:
+            return Definition.from_json(text)
+        except (ValueError, AttributeError):
+            return Definition(text, None)
 
-    def claim(self, study_name: str) -> None:
-        """Say that the folder holds the parts of study `study_name`."""
+    def claim(self, study: Definition) -> None:
+        """Say that the folder holds the parts of the study of definition `study`."""
         with writing(self.folder, "parts folder"):
-            (self.folder / "study").write_text(study_name + "\n", encoding="utf-8")
+            (self.folder / "study").write_text(study.to_json() + "\n", encoding="utf-8")
+
+    def code(self, now: dict | None = None) -> dict | None:
+        """The code (kernel, its source hash, urmx version) the folder's parts were last
+        computed by; with `now`, say that they are computed by `now` from here on."""
+        stamp = self.folder / "code"
+        try:
+            before = json.loads(stamp.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            before = None
+        if now is not None and now != before:
+            with writing(self.folder, "parts folder"):
+                stamp.write_text(json.dumps(now) + "\n", encoding="utf-8")
+        return before
 
     def save(self, key: str, result: dict[str, np.ndarray], cells: np.ndarray) -> Path:
         """Save one batch's arrays and its cells' keys as ``<key>.npz`` (written under a
@@ -119,7 +141,8 @@ class PartStore:
     def clear(self) -> int:
         """Remove every part file (and the stamps); the number of parts removed."""
         files = self.files()
-        for path in [*files, self.folder / "study", self.folder / "started"]:
+        for path in [*files, self.folder / "study", self.folder / "started",
+                     self.folder / "code"]:
             path.unlink(missing_ok=True)
         return len(files)
 

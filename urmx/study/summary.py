@@ -40,6 +40,11 @@ def _open(archive: Any) -> tuple[xr.Dataset, str]:
 
     if isinstance(archive, xr.Dataset):
         return archive, "(Dataset)"
+    if not isinstance(archive, (str, os.PathLike)):
+        from ..errors import InputError, got
+
+        raise InputError(f"archive must be a study archive's file name or an "
+                         f"xarray.Dataset, got {got(archive)}")
     return open_archive(archive, "archive"), str(archive)
 
 

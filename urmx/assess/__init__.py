@@ -51,6 +51,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from .demand import Position, RecordDemand, position_of, record_demand
+from .nzs1170 import DesignSpectrum
 from .result import Assessment, NotApplicable, Quantity
 
 #: name -> procedure(wall, demand, position=None, **options) -> Assessment, in report order
@@ -73,6 +74,8 @@ register("asce41_ht", asce41_ht)
 register("ntc_kinematic", ntc_kinematic)
 register("doherty", doherty)
 
-__all__ = ["PROCEDURES", "Assessment", "NotApplicable", "Position", "Quantity",
-           "RecordDemand", "asce41_ht", "doherty", "ntc_kinematic", "nzsee_c8",
+from .compare import compare  # noqa: E402 (iterates the registry above)
+
+__all__ = ["PROCEDURES", "Assessment", "DesignSpectrum", "NotApplicable", "Position", "Quantity",
+           "RecordDemand", "asce41_ht", "compare", "doherty", "ntc_kinematic", "nzsee_c8",
            "position_of", "record_demand", "register"]

@@ -92,11 +92,11 @@ class RecordDemand:
         return f"record {self.label} x {self.scale:g}"
 
 
-def record_demand(record, scale: float = 1.0, periods=None,
-                  records_dir=None) -> RecordDemand:
+def record_demand(record, scale: float = 1.0, periods=None, records_dir=None,
+                  label: str | None = None) -> RecordDemand:
     """The demand of a record (a `urmx.records.Record`, a manifest id, a file, or samples
     [m s-2] with their step [s]) at `scale`, its spectrum computed once on `periods` [s]
-    (default `RECORD_PERIODS`).
+    (default `RECORD_PERIODS`); `label` names it (default: the record's id).
 
     Raises
     ------
@@ -115,7 +115,7 @@ def record_demand(record, scale: float = 1.0, periods=None,
     if not np.all(np.isfinite(acc)):
         raise InputError(f"record {rec.id!r} has samples that are not finite numbers")
     psa = pseudo_spectral_acceleration(acc, rec.dt, periods, DAMPING)
-    return RecordDemand(str(rec.id), periods, np.asarray(psa, dtype=float),
+    return RecordDemand(str(label or rec.id), periods, np.asarray(psa, dtype=float),
                         float(np.max(np.abs(acc))), scale)
 
 
@@ -185,3 +185,17 @@ def position_of(wall: Wall, position: Position | str | None = None) -> Position:
     if position == "top":
         return Position(position, h, 2.0 * h)
     return Position(position, h, 3.0 * h)
+
+
+def check_demand(demand, procedure: str) -> None:
+    """Refuse an argument that is not a demand (an `urmx.errors.InputError`, one line)."""
+    if not all(hasattr(demand, a) for a in ("sa", "sd", "scale", "pga")):
+        raise InputError(f"{procedure}: demand must be a RecordDemand (urmx.assess."
+                         f"record_demand) or a DesignSpectrum (urmx.assess.DesignSpectrum), "
+                         f"not {type(demand).__name__}")
+
+
+def check_wall(wall, procedure: str) -> None:
+    """Refuse an argument that is not a `urmx.Wall` (an `urmx.errors.InputError`)."""
+    if not isinstance(wall, Wall):
+        raise InputError(f"{procedure}: wall must be a urmx.Wall, not {type(wall).__name__}")

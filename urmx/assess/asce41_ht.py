@@ -53,6 +53,7 @@ UCBC_SOURCE = ("Table No. A1-F (h/t of URM walls with minimum quality mortar) of
                "code adopting the UCBC Appendix Chapter 1 provisions (ecode360.com/44513729), "
                "used because ASCE/SEI 41-17's table, FEMA 356 Table 7-5 and IEBC Appendix A1's "
                "table could not be found; no S_X1 bins")
+SOURCE = UCBC_SOURCE
 
 
 @dataclass(frozen=True)

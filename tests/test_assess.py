@@ -336,6 +336,30 @@ def test_compare_on_a_synthetic_archive():
     assert c.attrs["archive_urmx_git_commit"] == "abc"
 
 
+def test_assessment_report_on_a_synthetic_archive(tmp_path):
+    from urmx.assessment_report import write_report
+
+    walls = {("w1", "D1"): building_wall(0.23), ("w1", "D1/both"): building_wall(0.23, "both"),
+             ("w2", "D1"): building_wall(0.35), ("w2", "D1/both"): building_wall(0.35, "both")}
+    dt, t = 0.01, np.arange(0.0, 20.0, 0.01)
+    records = {"r1": (np.sin(2 * np.pi * 1.3 * t), dt), "r2": (np.sin(2 * np.pi * 0.7 * t), dt)}
+    ida = np.array([[[d.capacity_scale for d in (doherty(walls[(w, x)], record_demand(
+        records[r])) for r in ("r1", "r2"))] for x in ("D1", "D1/both")] for w in ("w1", "w2")])
+    ida = ida * np.array([0.5, 4.0])  # r1: doherty unconservative (x2), r2: conservative
+    path = write_report(synthetic_archive(walls, ida), tmp_path, walls=walls, records=records)
+    text = path.read_text(encoding="utf-8")
+    assert "made by urmx commit `abc`" in text and "kernel source hash `k`" in text
+    # doherty: 2 of 4 (wall, record) pairs unconservative on each diaphragm, ratio 2 there
+    assert "| single storey | D1 | 4 | 4 | 50 % | 50 % |" in text
+    assert "**doherty** is unconservative for 50.0 % of all" in text
+    assert "there its capacity scale is 2 times the IDA's" in text
+    assert "**ntc_kinematic** is not applicable to any pair" in text
+    assert (tmp_path / "doherty.png").stat().st_size > 1000
+    assert not (tmp_path / "ntc_kinematic.png").exists()
+    csv = (tmp_path / "comparison.csv").read_text(encoding="utf-8").splitlines()
+    assert csv[0].startswith("procedure,diaphragm,group,pairs") and len(csv) == 1 + 4 * 2
+
+
 def test_compare_iterates_the_registry_and_refuses_a_non_ida_archive(tmp_path):
     walls = {(w, d): building_wall(0.23) for w in ("w1", "w2") for d in ("D1", "D1/both")}
     records = {"r1": synthetic_record(), "r2": synthetic_record(2.0)}

@@ -63,11 +63,12 @@ def summary(c: xr.Dataset) -> list[dict]:
 
 
 def _table_lines(rows: list[dict], procedure: str) -> list[str]:
-    body = [[r["diaphragm"], r["pairs"], r["applicable"], _pct(r["unconservative"]),
-             _pct(r["conservative"]), number(r["median_ratio"]), number(r["dispersion"], 2)]
+    body = [[r["group"], r["diaphragm"].replace("/both", ""), r["pairs"], r["applicable"],
+             _pct(r["unconservative"]), _pct(r["conservative"]), number(r["median_ratio"]),
+             number(r["dispersion"], 2)]
             for r in rows if r["procedure"] == procedure]
-    return table(["diaphragm", "pairs", "applicable", "unconservative", "conservative",
-                  "median ratio", "dispersion (ln)"], body)
+    return table(["storey", "diaphragm", "(wall, record) pairs", "applicable",
+                  "unconservative", "conservative", "median ratio", "dispersion (ln)"], body)
 
 
 def _pct(x: float) -> str:
@@ -182,12 +183,13 @@ def _procedure_lines(c: xr.Dataset) -> list[str]:
 
 
 def write_report(archive, out_dir: str | os.PathLike = "reports/assessment",
-                 records_dir=None) -> Path:
+                 records_dir=None, **compare_options) -> Path:
     """Compare the procedures with the IDA archive and write ``out_dir/REPORT.md``, its
-    figures and ``comparison.csv`` (module docstring). Returns the report's path."""
+    figures and ``comparison.csv`` (module docstring); `compare_options` go to
+    `urmx.assess.compare` (``walls=``, ``records=``). Returns the report's path."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    c = compare(archive, records_dir=records_dir)
+    c = compare(archive, records_dir=records_dir, **compare_options)
     rows = summary(c)
     _write_csv(rows, out / "comparison.csv")
     lines = _header(c, archive)

@@ -21,7 +21,7 @@ Every registered procedure is called as ::
   or flexible bottom).
 - ``demand``: a `urmx.assess.demand.RecordDemand` (a record at a scale factor, with its
   5 %-damped spectrum computed once: `record_demand`) or a
-  `urmx.assess.demand.DesignSpectrum` (NZS 1170.5: Z, site class, R, N). Both give
+  `urmx.assess.nzs1170.DesignSpectrum` (NZS 1170.5: Z, site class, R, N). Both give
   ``sa(T)`` [m s-2], ``sd(T)`` [m], ``pga`` [m s-2], ``scale`` and ``scaled(s)``.
 - ``position``: a `urmx.assess.demand.Position` or a storey name (``"one-storey"``,
   ``"first"``, ``"top"``, ``"other"``); None: what the wall's supports imply

@@ -378,6 +378,11 @@ def test_compare_iterates_the_registry_and_refuses_a_non_ida_archive(tmp_path):
         compare(xr.Dataset({"x": ("a", [1.0])}))
     with pytest.raises(MissingFileError):
         compare(tmp_path / "none.nc")
+    text = tmp_path / "text.nc"
+    text.write_text("not netCDF\n", encoding="utf-8")
+    with pytest.raises(InputError, match="not a netCDF archive") as exc:
+        compare(text)
+    assert "\n" not in str(exc.value)
     with pytest.raises(InputError, match="lacks the archive's record"):
         compare(synthetic_archive(walls, ida), walls=walls, records={"r1": (np.ones(9), 0.01)})
 

@@ -110,7 +110,8 @@ def _open(archive) -> xr.Dataset:
             with xr.open_dataset(path) as f:
                 ds = f.load()
         except (OSError, ValueError) as exc:
-            raise InputError(f"{path}: not a netCDF archive ({exc})") from None
+            first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(f"{path}: not a netCDF archive ({first[:120]})") from None
     missing = [v for v in ("collapse_scale", "censored") if v not in ds]
     if missing or "cor" not in ds.dims:
         raise InputError(f"not an IDA archive (no {', '.join(missing) or 'cor dimension'}): "

@@ -27,6 +27,7 @@ supports imply (module docstring of :func:`position_of`).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -105,7 +106,8 @@ def record_demand(record, scale: float = 1.0, periods=None, records_dir=None,
         periods that are not positive and increasing.
     """
     scale = _positive("scale", scale)
-    rec = as_record(record, records_dir) if isinstance(record, str) else as_record(record)
+    rec = as_record(record, records_dir) if isinstance(record, (str, os.PathLike)) \
+        else as_record(record)
     periods = RECORD_PERIODS if periods is None else np.asarray(periods, dtype=float)
     if periods.ndim != 1 or periods.size < 2 or not np.all(periods > 0) \
             or not np.all(np.diff(periods) > 0):

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 
+from ..errors import InputError
 from ..model import PAPER_G, Wall
 from .demand import Position, check_demand, check_wall, position_of
 from .mechanism import substitute_structure
@@ -89,8 +90,6 @@ def nzsee_c8(wall: Wall, demand, position: Position | str | None = None,
     check_demand(demand, NAME)
     if isinstance(R_p, bool) or not isinstance(R_p, (int, float)) or not R_p > 0 \
             or not math.isfinite(R_p):
-        from ..errors import InputError
-
         raise InputError(f"nzsee_c8: R_p={R_p!r} must be a finite number > 0")
     pos = position_of(wall, position)
     q = substitute_structure(wall)

@@ -23,7 +23,7 @@ import xarray as xr
 
 from .assess import compare
 from .markdown import number, table
-from .provenance import describe, identity
+from .provenance import code_version, describe, identity
 from .reporting import save_figure
 
 SOFT, STIFF = ("D1", "D2"), ("D4", "D5")  # flexible and stiff diaphragms of the findings
@@ -134,7 +134,7 @@ def findings(c: xr.Dataset, rows: list[dict]) -> list[str]:
             line = (f"- **{p}** is unconservative for {100 * total:.1f} % of all (wall, "
                     f"diaphragm, record) cells, most often on {worst['diaphragm']} "
                     f"({_pct(worst['unconservative'])}")
-            if not math.isnan(worst["median_ratio_unconservative"]):
+            if np.isfinite(worst["median_ratio_unconservative"]):
                 line += (f"; there its capacity scale is "
                          f"{number(worst['median_ratio_unconservative'])} times the IDA's, "
                          "median over the unconservative cells")
@@ -220,7 +220,7 @@ def _header(c: xr.Dataset, archive) -> list[str]:
         f"- Archive: `{name}`, study `{a.get('archive_study_name', '?')}`, made by urmx "
         f"commit `{a.get('archive_urmx_git_commit', '?')}`{dirty}, kernel source hash "
         f"`{a.get('archive_kernel_source_hash', '?')}`; COR {a.get('cor')}.",
-        f"- Report written by: {describe(identity())}.",
+        f"- Report written by urmx {code_version()} ({describe(identity())}).",
         f"- {c.sizes['wall']} walls x {c.sizes['diaphragm']} diaphragms x "
         f"{c.sizes['record']} records; the capacity scale of a procedure is the record scale "
         "factor at which its check is at its limit, urmx's is the IDA's collapse scale.",

@@ -873,27 +873,19 @@ EPS = 2.220446049250313e-16
 
 
 @inner
-def _polish(cf, m, a, b):
+def _polish(cf, m, a, b, x):
     """The root of a polynomial in a bracket (a, b) of :func:`_newton` (positive at a, at
-    or below zero at b) to the last few ulps of s: Newton steps from the bracket's middle
-    until a step is within 4 ulps (two or three: the bracket is already narrow), then, if
-    the polynomial there has not crossed yet, steps of growing length (1 ulp, 2, 4, ...)
-    towards b until it has. So the root returned is the crossed point nearest the
-    polynomial's root, as evaluation round-off allows, whatever path the bracket took
-    (its width, 1e-12 s, made event times jitter by about 1e-13 s from run to run of
-    nearly identical inputs, which chatter amplifies). Returns (a, x), p(x) <= 0."""
-    x = 0.5 * (a + b)
+    or below zero at b) to the last few ulps of s, from x, the point of a Newton step of
+    less than half the bracket's tolerance: Newton's iteration converges quadratically, so
+    x is the root to round-off, whatever path the bracket took. If the polynomial has not
+    crossed there yet, steps towards b, from twice the distance Newton's step gives (at
+    least an ulp) and doubling, find the crossed point next to it. So an event's time is a
+    function of its series, not of the bracket (whose width, 1e-12 s, made event times
+    jitter by about 1e-13 s from run to run of nearly identical inputs, which chatter
+    amplifies). Returns (a, x), p(x) <= 0."""
+    x = min(max(x, a), b)
     p, dp = _peval1(cf, m, x)
-    for _ in range(4):
-        if p == 0.0 or dp == 0.0:
-            break
-        xn = min(max(x - p / dp, a), b)
-        step = abs(xn - x)
-        x = xn
-        p, dp = _peval1(cf, m, x)
-        if step <= 4.0 * EPS * abs(x):
-            break
-    d = EPS * abs(x) + 5e-324
+    d = max(EPS * abs(x) + 5e-324, -2.0 * p / dp if dp < 0.0 else 0.0)
     for _ in range(64):
         if p <= 0.0:
             return a, x
@@ -911,8 +903,8 @@ def _newton(cf, m, lo, hi, tol, guess, order):
     value and slope by :func:`_peval1`) or of its slope (order 1, an extremum, on slope
     and curvature by :func:`_peval`) over [lo, hi]; stops on the bracket width. Returns
     (a, b), |b - a| <= tol: the function has at a the sign it has at lo, at b the other.
-    A root (order 0) is then polished to the last few ulps (:func:`_polish`), b the
-    polished crossed point."""
+    A root (order 0) is instead polished to the last few ulps once a Newton step is below
+    the tolerance (:func:`_polish`), b the polished crossed point."""
     # oriented f: negative on the lo side
     if order == 0:
         orient = -1.0
@@ -920,6 +912,7 @@ def _newton(cf, m, lo, hi, tol, guess, order):
         orient = 1.0 if _peval(cf, m, lo)[1] < 0.0 else -1.0
     a, b = lo, hi
     x = guess if lo < guess < hi else 0.5 * (lo + hi)
+    xn = x
     for _ in range(100):
         if order == 0:
             v, dv = _peval1(cf, m, x)
@@ -933,17 +926,20 @@ def _newton(cf, m, lo, hi, tol, guess, order):
             a = x
         else:
             b = x
-        if b - a <= tol:
-            break
         xn = x - f / df if df != 0.0 else 0.5 * (a + b)
         if not (a < xn < b):
             xn = 0.5 * (a + b)
-        if abs(xn - x) < 0.5 * tol:  # close the bracket from the other side
+        if b - a <= tol:
+            break
+        if abs(xn - x) < 0.5 * tol:
+            if order == 0:  # converged: to the last ulps from Newton's point
+                return _polish(cf, m, a, b, xn)
+            # close the bracket from the other side
             xn = x + 0.5 * tol if f < 0.0 else x - 0.5 * tol
             xn = min(max(xn, a), b)
         x = xn
-    if order == 0:
-        return _polish(cf, m, a, b)
+    if order == 0:  # (the bracket closed before a Newton step was that short)
+        return _polish(cf, m, a, b, xn)
     return a, b
 
 
@@ -1470,8 +1466,8 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
     done = False
     beta_prev = beta0
     near = 0  # bit k: event function k may have just left zero (set at events)
-    ev_here = 0  # events in the current span of EVENT_SPAN seconds
-    span = -1
+    ev_here = 0  # events in the current span of EVENT_SPAN seconds, which ends at span_end
+    span_end = -1.0
     for step in range(nsteps):
         if step < N - 1:
             alpha = ag[step]
@@ -1628,9 +1624,8 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                     evlog[n_events, 1] = kind[k_ev]
                     evlog[n_events, 2] = tgt[k_ev]
                 n_events += 1
-                sp = int(math.floor((t0 + tau) / EVENT_SPAN))
-                if sp != span:
-                    span = sp
+                if t0 + tau >= span_end:  # a new span (t >= 0: int() is floor)
+                    span_end = (int((t0 + tau) * (1.0 / EVENT_SPAN)) + 1) * EVENT_SPAN
                     ev_here = 0
                 ev_here += 1
                 if ev_here > MAX_EVENTS:

@@ -873,11 +873,13 @@ EPS = 2.220446049250313e-16
 
 
 @inner
-def _polish(cf, m, a, b, x):
+def _polish(cf, m, a, b, x, steps):
     """The root of a polynomial in a bracket (a, b) of :func:`_newton` (positive at a, at
-    or below zero at b) to the last few ulps of s, from x, the point of a Newton step of
-    less than half the bracket's tolerance: Newton's iteration converges quadratically, so
-    x is the root to round-off, whatever path the bracket took. If the polynomial has not
+    or below zero at b) to the last few ulps of s, from x: the point of a Newton step of
+    less than half the bracket's tolerance (steps = 0: Newton's iteration converges
+    quadratically, so x is the root to round-off, whatever path the bracket took), or
+    any point of a bracket that closed first (then up to `steps` Newton steps, until one
+    is within 4 ulps of 1 or stops shrinking: round-off). If the polynomial has not
     crossed there yet, steps towards b, from twice the distance Newton's step gives (at
     least an ulp) and doubling, find the crossed point next to it. So an event's time is a
     function of its series, not of the bracket (whose width, 1e-12 s, made event times
@@ -885,6 +887,17 @@ def _polish(cf, m, a, b, x):
     amplifies). Returns (a, x), p(x) <= 0."""
     x = min(max(x, a), b)
     p, dp = _peval1(cf, m, x)
+    last = np.inf
+    for _ in range(steps):
+        if p == 0.0 or dp == 0.0:
+            break
+        xn = min(max(x - p / dp, a), b)
+        step = abs(xn - x)
+        if step <= 4.0 * EPS or step >= last:
+            break
+        last = step
+        x = xn
+        p, dp = _peval1(cf, m, x)
     d = max(EPS * abs(x) + 5e-324, -2.0 * p / dp if dp < 0.0 else 0.0)
     for _ in range(64):
         if p <= 0.0:
@@ -933,13 +946,13 @@ def _newton(cf, m, lo, hi, tol, guess, order):
             break
         if abs(xn - x) < 0.5 * tol:
             if order == 0:  # converged: to the last ulps from Newton's point
-                return _polish(cf, m, a, b, xn)
+                return _polish(cf, m, a, b, xn, 0)
             # close the bracket from the other side
             xn = x + 0.5 * tol if f < 0.0 else x - 0.5 * tol
             xn = min(max(xn, a), b)
         x = xn
     if order == 0:  # (the bracket closed before a Newton step was that short)
-        return _polish(cf, m, a, b, xn)
+        return _polish(cf, m, a, b, xn, 3)
     return a, b
 
 

@@ -1,7 +1,7 @@
 """Which study an archive or a parts folder belongs to: its *definition*, not its name.
 
 A study's definition is the canonical form its cells' keys come from (`urmx.study.cells`):
-the kind, the kind's settings, the tail, the default impact law, the names of the cell
+the kind, the kind's settings, the tail, t_rest (when not the default), the default impact law, the names of the cell
 dimensions (together, the *base*, kept as the archive's attribute ``study_definition``)
 and the values of each dimension (the wall, diaphragm and record ids, the COR values, ...:
 an archive's coordinates). The study's ``name`` is a label: two files of one name with other
@@ -28,6 +28,8 @@ import hashlib
 import json
 from dataclasses import dataclass, field
 from typing import Any
+
+from ..model import T_REST
 
 #: values of a dimension a parts folder lists (more: a digest of them)
 LISTED = 65536
@@ -59,10 +61,12 @@ def _plain(value: Any) -> Any:
 def base(study: Any, kind: Any) -> str:
     """The base of a study's definition as canonical JSON (module docstring)."""
     dims = kind.cell_dims(study)
-    return _canonical({"kind": kind.name, "settings": _plain(study.settings),
-                       "tail": study.tail,
-                       "impact": None if "impact" in dims else study.impact,
-                       "dims": list(dims)})
+    base = {"kind": kind.name, "settings": _plain(study.settings), "tail": study.tail,
+            "impact": None if "impact" in dims else study.impact, "dims": list(dims)}
+    t_rest = getattr(study, "t_rest", T_REST)
+    if t_rest != T_REST:  # the default left out, as in the cells' keys: earlier archives stay
+        base["t_rest"] = t_rest
+    return _canonical(base)
 
 
 def labels(study: Any, kind: Any) -> dict[str, list]:

@@ -58,8 +58,8 @@ PROVENANCE = [
 
 @pytest.mark.parametrize(("file", "kwargs", "channel", "dt", "npts", "pga_g"), PROVENANCE,
                          ids=[f"{p[0].split('/')[-1]}-{p[2]}" for p in PROVENANCE])
-def test_reads_provenance_record(records_dir, file, kwargs, channel, dt, npts, pga_g):
-    st = R.read(records_dir / file, **kwargs)
+def test_reads_provenance_record(shared_records, file, kwargs, channel, dt, npts, pga_g):
+    st = R.read(shared_records / file, **kwargs)
     tr = st.select(channel=channel)[0] if channel else st[0]
     assert tr.stats.delta == pytest.approx(dt, rel=1e-9)
     assert tr.stats.npts == npts
@@ -72,9 +72,9 @@ def test_reads_provenance_record(records_dir, file, kwargs, channel, dt, npts, p
                                   "formats/geonet/20161113_110259_WTMC_20.V2A",
                                   "formats/dmg/CE89146.V2", "formats/smc/0111a.smc",
                                   "formats/usc/017m30bt.s0a"])
-def test_pga_matches_header(records_dir, file):
+def test_pga_matches_header(shared_records, file):
     """Headers that state a peak agree with the data (AT2: PROVENANCE, no header peak)."""
-    for tr in R.read(records_dir / file):
+    for tr in R.read(shared_records / file):
         pga = np.abs(tr.data).max()
         header = tr.stats.record.header_pga
         if header is None:  # PEER AT2 headers carry no peak
@@ -89,9 +89,9 @@ def test_pga_matches_header(records_dir, file):
     ("formats/smc/891018_1.sma-1.0444a.smc", "065", 0.001, 0.0818),
     ("formats/usc/017m30cc.y0a", "N00W", 0.004, 0.4064),
 ])
-def test_uneven_records_resampled_with_warning(records_dir, file, channel, dt, pga_g):
+def test_uneven_records_resampled_with_warning(shared_records, file, channel, dt, pga_g):
     with pytest.warns(UrmxWarning, match="unevenly sampled"):
-        st = R.read(records_dir / file)
+        st = R.read(shared_records / file)
     tr = st.select(channel=channel)[0]
     assert tr.stats.delta == dt
     assert np.abs(tr.data).max() / G_N == pytest.approx(pga_g, rel=0.02)
@@ -109,9 +109,9 @@ def test_penzien_el_centro_comment_count_warns(records_dir):
     ("formats/cosmos/NP8040-n.1000hyfh.HNE.01.V0c", "raw digitiser counts"),
     ("formats/dmg/CE89146.V3", "spectra, no acceleration history"),
 ])
-def test_refused_files(records_dir, file, match):
+def test_refused_files(shared_records, file, match):
     with pytest.raises(R.UnsupportedRecordError, match=match) as err:
-        R.read(records_dir / file)
+        R.read(shared_records / file)
     assert Path(file).name in str(err.value)
 
 
@@ -159,10 +159,10 @@ def test_clear_errors(at2, make_kwargs, read_kwargs, error, match):
     assert str(path) in str(err.value)
 
 
-def test_truncated_real_files(records_dir, tmp_path):
+def test_truncated_real_files(shared_records, tmp_path):
     for name in ("formats/peer/RSN763_LOMAP_GIL067.AT2",
                  "formats/geonet/20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2"):
-        lines = (records_dir / name).read_bytes().splitlines(keepends=True)
+        lines = (shared_records / name).read_bytes().splitlines(keepends=True)
         cut = tmp_path / Path(name).name
         cut.write_bytes(b"".join(lines[: len(lines) // 2 + 7]))
         with pytest.raises(R.RecordError, match=str(cut)):
@@ -321,7 +321,7 @@ def test_library_against_catalog(records_dir):
 # -- command line -------------------------------------------------------------------------
 
 
-def test_cli(records_dir, tmp_path, capsys):
+def test_cli(records_dir, shared_records, tmp_path, capsys):
     from urmx.cli import main
 
     assert main(["records", "--records", str(records_dir), "list", "--set", "paper"]) == 0
@@ -329,7 +329,7 @@ def test_cli(records_dir, tmp_path, capsys):
     assert main(["records", "--records", str(records_dir), "show", "elcentro"]) == 0
     out = capsys.readouterr().out
     assert "arias_intensity" in out and "0.3484 g" in out
-    assert main(["records", "show", str(records_dir / "formats/dmg/CE89146.V3")]) == 2
+    assert main(["records", "show", str(shared_records / "formats/dmg/CE89146.V3")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "CE89146.V3" in err and "Traceback" not in err
     png = tmp_path / "nahanni.png"
@@ -346,13 +346,13 @@ def test_plot_has_three_panels(records_dir):
     assert fig.axes[1].get_xlabel() == "frequency [Hz]"
 
 
-def test_read_copy_elsewhere_detects_format_from_content(records_dir, tmp_path):
+def test_read_copy_elsewhere_detects_format_from_content(shared_records, tmp_path):
     """The file name carries no hint: the content decides."""
     for src in ("formats/peer/RSN763_LOMAP_GIL067.AT2", "formats/geonet/"
                 "20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2", "formats/smc/0111a.smc"):
         dst = tmp_path / "record.bin"
-        shutil.copy(records_dir / src, dst)
-        assert R.detect_format(dst) == R.detect_format(records_dir / src)
+        shutil.copy(shared_records / src, dst)
+        assert R.detect_format(dst) == R.detect_format(shared_records / src)
         assert len(R.read(dst)) >= 1
 
 

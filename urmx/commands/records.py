@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 UNITS = ("g", "m/s2", "cm/s2", "mm/s2")
 
 
 def _records_option(p, default) -> None:
     p.add_argument("--records", metavar="DIR", default=default,
-                   help="records directory (default $URMX_RECORDS)")
+                   help="records directory: yours wins for the records it holds (default "
+                        "$URMX_RECORDS or urmx.toml, else the records urmx ships)")
 
 
 def file_options(s, what: str = "a record file") -> None:
@@ -149,6 +151,23 @@ def _index(args) -> int:
     return 0
 
 
+def _from(entry: dict) -> str:
+    """Where a listed record's file is read from: ``shipped`` (the records urmx ships) or
+    ``yours`` (the folder the user named)."""
+    from urmx.config import shipped_records
+
+    return "shipped" if Path(entry["folder"]) == shipped_records() else "yours"
+
+
+def _folders(rows: list[dict]) -> None:
+    """The folders the listed records come from, one line each with how many."""
+    for tag in ("yours", "shipped"):
+        held = [e for e in rows if _from(e) == tag]
+        if held:
+            what = "your records folder" if tag == "yours" else "shipped with urmx"
+            print(f"{tag}: {len(held)} records from {held[0]['folder']} ({what})")
+
+
 def _run(args) -> int:
     if args.action == "list":
         from urmx.errors import InputError
@@ -161,10 +180,11 @@ def _run(args) -> int:
                              f"{', '.join(sets)})")
         rows = [e for e in entries.values() if not args.set or e["set"] == args.set]
         w = max([22] + [len(e["id"]) for e in rows])
-        print(f"{'id':{w}s} {'set':20s} {'PGA g':>6s} {'scale':>7s}  event / station / "
-              "component")
+        _folders(rows)
+        print(f"{'id':{w}s} {'from':7s} {'set':20s} {'PGA g':>6s} {'scale':>7s}  event / "
+              "station / component")
         for e in rows:
-            print(f"{e['id']:{w}s} {e['set']:20s} {e['expected_pga_g']:6.3f} "
+            print(f"{e['id']:{w}s} {_from(e):7s} {e['set']:20s} {e['expected_pga_g']:6.3f} "
                   f"{e['scale_factor']:7.4g}  {e['event']} {e.get('date', '')} / "
                   f"{e.get('station', '')} / {e.get('component', '')}"
                   + ("  [substitute]" if e.get("substitute") else ""))

@@ -20,9 +20,8 @@ from urmx import fragility_report as FR
 from urmx import paper as P
 from urmx.catalog import CatalogError, load_study
 from urmx.cli import main
-from urmx.config import project_root
+from urmx.config import project_root, shipped_records
 from urmx.config import records_dir as _records_dir
-from urmx.config import shipped_records
 
 AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
        "ACCELERATION TIME SERIES IN UNITS OF G\nNPTS=  8, DT=   {dt} SEC\n"

@@ -13,7 +13,6 @@ import xarray as xr
 
 from .errors import InputError, MissingFileError
 
-
 #: the time stamp an archive's ``history`` lines start with (``2026-11-23T15:34:59+00:00 ``)
 _STAMP = re.compile(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d(?:\.\d+)?(?:Z|[+-]\d\d:\d\d)?\s+")
 

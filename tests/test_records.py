@@ -11,6 +11,7 @@ import pytest
 
 import urmx.records as R
 from urmx import UrmxWarning
+from urmx.config import shipped_records
 
 G_N = 9.80665  # standard gravity g_n [m s-2] (records in units of g)
 
@@ -298,10 +299,35 @@ def test_checksum_mismatch_and_missing_file(records_dir, tmp_path):
     (fake / "elcentro_S00E_1940.dat").write_bytes(data.replace(b"12.540", b"12.541", 1))
     with pytest.raises(R.ChecksumError, match="elcentro_S00E_1940.dat.*satish-annigeri"):
         R.load("elcentro", tmp_path)
-    with pytest.raises(FileNotFoundError, match="NS1-010.*maddyblue/slammer"):
-        R.load("nahanni", tmp_path)
+    # the user's folder wins only for the records it holds: nahanni from the shipped one
+    assert R.load("nahanni", tmp_path).stats.npts == 4038
+    assert R.manifest(tmp_path)["nahanni"]["folder"] == str(shipped_records())
     with pytest.raises(R.ManifestError, match="did you mean"):
         R.load("elcentr", tmp_path)
+    own = tmp_path / "manifest.toml"  # a record of the folder's own manifest, file missing
+    entry = dict(R.manifest()["nahanni"], id="mine", file="gone/NS1-010")
+    R.write_manifest([entry], own)
+    with pytest.raises(FileNotFoundError, match="gone/NS1-010.*maddyblue/slammer"):
+        R.load("mine", tmp_path)
+
+
+def test_shipped_records_are_the_manifests():
+    """Every file of the shipped records folder is a record file of the manifest with its
+    SHA-256 (or one of the folder's own documents), and PROVENANCE.md lists each with that
+    SHA-256: the records travel with their attribution."""
+    import hashlib
+
+    folder = shipped_records()
+    entries = R.manifest(folder)
+    by_file = {e["file"]: e["sha256"] for e in entries.values()}
+    provenance = (folder / "PROVENANCE.md").read_text(encoding="utf-8")
+    own = {"manifest.toml", "PROVENANCE.md", "INGEST.md", "library/catalog.tsv"}
+    files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+    assert set(files) - own == set(by_file)  # no file without a record, no record without
+    for rel, digest in by_file.items():
+        assert hashlib.sha256((folder / rel).read_bytes()).hexdigest() == digest, rel
+        assert f"| `{rel}` |" in provenance and f"`{digest}`" in provenance, rel
+    assert len(by_file) == 47 and sum((folder / f).stat().st_size for f in by_file) < 4.5e6
 
 
 def test_library_against_catalog(records_dir):

@@ -137,7 +137,8 @@ class _Channel:
 
 
 def read(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
-         unit: str | None = None, *, channel: str | None = None, allow_unusual: bool = False):
+         unit: str | None = None, *, channel: str | None = None, allow_unusual: bool = False,
+         response: str | os.PathLike | None = None):
     """Read an accelerogram file into an :class:`obspy.Stream` in m s-2.
 
     Parameters
@@ -161,8 +162,17 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
         ignored). Without it every channel is returned.
     allow_unusual : bool
         Read a record whose time step lies outside `DT_RANGE`, whose PGA lies outside
-        `PGA_RANGE_G` or whose file is larger than `MAX_RECORD_BYTES`; such values are
-        refused otherwise, as they are nearly always unit mistakes.
+        `PGA_RANGE_G` or whose file is larger than `MAX_RECORD_BYTES`, or that fails a
+        check of `urmx.records.checks` (a header stating velocity, displacement or volts,
+        a seismometer's channel, an instrument calibration or counts, a PGV or PGD beyond
+        strong motion, a stated unit the values disagree with); such records are refused
+        otherwise, as they are nearly always mistakes. What was overridden is written to
+        ``stats.processing`` (``urmx: allow_unusual overrode: ...``).
+    response : str or path-like, optional
+        A StationXML file whose instrument response is removed (ObsPy
+        ``remove_response(output="ACC")``) from the traces of a file in one of ObsPy's
+        formats, turning a digitiser's counts into m s-2; without it integer samples are
+        refused as counts.
 
     Returns
     -------
@@ -186,8 +196,8 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     """
     from obspy import Stream
 
-    return Stream([c.trace() for c in read_samples(path, format, dt, unit, channel=channel,
-                                                   allow_unusual=allow_unusual)])
+    return Stream([c.trace() for c in read_file(path, format, dt, unit, channel,
+                                                allow_unusual, response=response).samples])
 
 
 def read_samples(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
@@ -201,11 +211,13 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
 
 def read_channel(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
                  unit: str | None = None, *, channel: str | None = None,
-                 allow_unusual: bool = False) -> Samples:
+                 allow_unusual: bool = False,
+                 response: str | os.PathLike | None = None) -> Samples:
     """One channel of a record file as :class:`Samples`: `channel`, or the file's only
     one; a multi-channel file without `channel` is a :class:`ChannelError` listing its
     channels (never a silent first channel). Otherwise as :func:`read_samples`."""
-    return read_file(path, format, dt, unit, channel, allow_unusual, one=True).samples[0]
+    return read_file(path, format, dt, unit, channel, allow_unusual, one=True,
+                     response=response).samples[0]
 
 
 @dataclass(frozen=True)
@@ -280,7 +292,8 @@ class RecordFile:
 
 def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float | None = None,
              unit: str | None = None, format: str | None = None,
-             allow_unusual: bool = False) -> RecordFile:
+             allow_unusual: bool = False,
+             response: str | os.PathLike | None = None) -> RecordFile:
     """One channel of a record file with its provenance, reading the file once.
 
     Parameters
@@ -309,7 +322,7 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
         As :func:`read`.
     """
     return _record_files(path, read_file(path, format, dt, unit, channel, allow_unusual,
-                                     one=True))[0]
+                                     one=True, response=response))[0]
 
 
 def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str | None = None,
@@ -386,10 +399,13 @@ class FileRead(NamedTuple):
 
 def read_file(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
               unit: str | None = None, channel: str | None = None,
-              allow_unusual: bool = False, one: bool = False) -> FileRead:
+              allow_unusual: bool = False, one: bool = False,
+              response: str | os.PathLike | None = None) -> FileRead:
     """Read a record file once: its checked channels, the SHA-256 of its bytes and the
     names of all its channels. Arguments and errors as :func:`read`; with ``one=True`` a
-    multi-channel file without `channel` is a :class:`ChannelError` listing them."""
+    multi-channel file without `channel` is a :class:`ChannelError` listing them;
+    `response`: a StationXML file whose instrument response is removed from the traces of
+    a file in one of ObsPy's formats (counts to m s-2)."""
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"record file {str(path)!r} does not exist")
@@ -419,7 +435,7 @@ def read_file(path: str | os.PathLike, format: str | None = None, dt: float | No
             encoding = _text_encoding(raw[:SNIFF_BYTES]) or "latin-1"
             channels = _PARSERS[fmt](path, _decode(raw, encoding).splitlines())
         else:
-            channels = _parse_obspy(path, obspy_format, raw)
+            channels = _parse_obspy(path, obspy_format, raw, response)
             fmt = obspy_format
     except RecordError:
         raise
@@ -1094,8 +1110,15 @@ def _time_like(steps: np.ndarray) -> bool:
         return med != 0.0 and bool(np.mean(np.abs(steps - med) <= 0.5 * abs(med)) >= 0.9)
 
 
-def _parse_obspy(path: Path, format: str | None, raw: bytes) -> list[_Channel]:
+def _parse_obspy(path: Path, format: str | None, raw: bytes,
+                 response: str | os.PathLike | None = None) -> list[_Channel]:
+    """The traces of a file in one of ObsPy's formats, each with what its header says it
+    is not (`urmx.records.checks.quantity_problems`: a velocity, a seismometer, counts);
+    with `response` (a StationXML file) the instrument response is removed to
+    acceleration [m s-2]."""
     import obspy
+
+    from .checks import counts_problem, quantity_problems
 
     if format is None or format.upper() not in OBSPY_FORMATS:  # never auto-detect
         raise UnknownFormatError(path, f"ObsPy format {format!r} is not one urmx reads")
@@ -1104,11 +1127,43 @@ def _parse_obspy(path: Path, format: str | None, raw: bytes) -> list[_Channel]:
     except Exception as exc:  # noqa: BLE001
         raise UnknownFormatError(path, f"ObsPy cannot read it as {format}: "
                                  f"{_one_line(exc)}") from None
-    return [_Channel(tr.data.astype(float), None, tr.stats.delta, network=tr.stats.network,
-                     station=tr.stats.station, channel=tr.stats.channel,
-                     starttime=tr.stats.starttime, unit_from_file=False,
-                     note=f"read by ObsPy ({format.upper()})",
-                     extra={"dt_source": f"{format.upper()} header"}) for tr in st]
+    inventory = None if response is None else _inventory(path, response)
+    out = []
+    for tr in st:
+        problems = quantity_problems(tr.stats, inventory is not None)
+        note, unit = f"read by ObsPy ({format.upper()})", None
+        counts = counts_problem(tr.data.dtype, inventory is not None)
+        if counts:
+            problems.append(counts)
+        if inventory is not None:
+            try:
+                tr.remove_response(inventory=inventory, output="ACC")
+            except Exception as exc:  # noqa: BLE001
+                raise RecordError(path, f"the response in {str(response)!r} cannot be removed "
+                                  f"from {tr.id}: {_one_line(exc)}") from None
+            note, unit = note + f", response of {Path(response).name} removed (ACC)", "m/s2"
+        out.append(_Channel(tr.data.astype(float), unit, tr.stats.delta,
+                            network=tr.stats.network, station=tr.stats.station,
+                            channel=tr.stats.channel, starttime=tr.stats.starttime,
+                            unit_from_file=unit is not None, note=note,
+                            extra={"dt_source": f"{format.upper()} header",
+                                   "unit_source": f"response {Path(str(response)).name}",
+                                   "problems": problems}))
+    return out
+
+
+def _inventory(path: Path, response: str | os.PathLike):
+    """The StationXML (or other ObsPy inventory) file `response`, read, or a one-line
+    error naming it."""
+    import obspy
+
+    if not Path(response).is_file():
+        raise MissingFileError(f"response file {str(response)!r} (for {path}) does not exist")
+    try:
+        return obspy.read_inventory(str(response))
+    except Exception as exc:  # noqa: BLE001
+        raise RecordError(path, f"the response file {str(response)!r} cannot be read as "
+                          f"StationXML: {_one_line(exc)}") from None
 
 
 _PARSERS = {"peer": _parse_peer, "geonet": _parse_geonet, "cosmos": _parse_cosmos,
@@ -1168,6 +1223,8 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
         raise TruncatedRecordError(path, f"{label} holds a single sample ({values[0]:g}), not "
                                    "an acceleration history")
     check_finite(values, label, path=path)
+    overrides = [_unusual(path, f"{label}: {problem}", allow_unusual)
+                 for problem in ch.extra.get("problems", ())]
     # units: a unit stated by the file and given by the caller must agree
     unit_source = ch.extra.get("unit_source", "header")
     if ch.unit is not None and ch.unit_from_file:
@@ -1215,39 +1272,72 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
     if not (math.isfinite(step) and step > 0):
         raise MissingTimeStepError(path, f"{label} has time step dt={step!r} s; a time step "
                                    "must be a positive number of seconds")
-    lo, hi = DT_RANGE
-    if not allow_unusual and not lo <= step <= hi:
-        src = "given" if ch.dt is None and ch.times is None else \
-            "of the time column" if ch.times is not None else f"from the {dt_source}"
-        hint = (" (milliseconds given as seconds?)" if lo <= step / 1000 <= hi and step > hi
-                else " (implausibly small)" if step < lo else "")
-        raise UnusualRecordError(path, f"{label} has time step dt={step:g} s ({src}), outside "
-                                 f"the {lo:g}-{hi:g} s of strong-motion records{hint}{_ALLOW}")
     factor = _HEADER_UNITS[file_unit]
     data = values * factor
     if file_unit != "m/s2":
         processing.append(f"urmx: unit {file_unit} -> m/s2 (x {factor:g})")
+    src = unit_source if ch.unit_from_file and ch.unit else "given"
+    processing += overrides + _plausible(path, label, ch, values, data, float(step),
+                                         (file_unit, src, dt_source), allow_unusual)
+    record = dict(format=fmt, file=str(path), unit_in_file=file_unit,
+                  header_pga=None if ch.header_peak is None else ch.header_peak * factor,
+                  uneven=ch.times is not None)
+    return Samples(data, float(step), ch.station or path.stem, (ch.network or "")[:8],
+                   ch.channel or "", ch.starttime, record, processing)
+
+
+def _unusual(path: Path, problem: str, allow_unusual: bool) -> str:
+    """Refuse a record for `problem` (`UnusualRecordError`), or with ``allow_unusual`` the
+    processing step that says it was overridden (kept in a study archive's
+    ``record_processing``)."""
+    if not allow_unusual:
+        raise UnusualRecordError(path, problem + _ALLOW)
+    return f"urmx: allow_unusual overrode: {problem}"
+
+
+def _plausible(path: Path, label: str, ch: _Channel, values: np.ndarray, data: np.ndarray,
+               step: float, how: tuple[str, str, str], allow_unusual: bool) -> list[str]:
+    """The checks of a record's time step, PGA, velocity and displacement and of its
+    stated unit against its values (`urmx.records.checks`); each problem refuses the
+    record, or with ``allow_unusual`` becomes an ``overrode`` processing step (returned).
+    `how`: (unit of the values, where it comes from, where the time step comes from)."""
+    from .checks import motion_problem, unit_problem
+
+    file_unit, src, dt_source = how
+    out = []
+    lo, hi = DT_RANGE
+    if not lo <= step <= hi:
+        where = "given" if ch.dt is None and ch.times is None else \
+            "of the time column" if ch.times is not None else f"from the {dt_source}"
+        hint = (" (milliseconds given as seconds?)" if lo <= step / 1000 <= hi and step > hi
+                else " (implausibly small)" if step < lo else "")
+        out.append(_unusual(path, f"{label} has time step dt={step:g} s ({where}), outside "
+                            f"the {lo:g}-{hi:g} s of strong-motion records{hint}",
+                            allow_unusual))
     peak = float(np.max(np.abs(values)))
+    factor = _HEADER_UNITS[file_unit]
     pga_g = peak * factor / STANDARD_GRAVITY
     lo, hi = PGA_RANGE_G
-    if not allow_unusual and not lo <= pga_g <= hi:
+    if not lo <= pga_g <= hi:
         if peak == 0.0:
-            raise UnusualRecordError(path, f"every sample of {label} is zero{_ALLOW}")
+            return out + [_unusual(path, f"every sample of {label} is zero", allow_unusual)]
         fits = [f"as {u}: {peak * f / STANDARD_GRAVITY:.3g} g"
                 for u, f in UNIT_FACTORS.items()
                 if u != file_unit and lo <= peak * f / STANDARD_GRAVITY <= hi]
         hint = f" ({'; '.join(fits)})" if fits else ""
         verdict = ("the unit is wrong" if pga_g > hi else
                    "the unit is likely wrong, or the channel holds no strong motion")
-        src = unit_source if ch.unit_from_file and ch.unit else "given"
-        raise UnusualRecordError(path, f"{label} would have PGA {pga_g:.3g} g with unit "
-                                 f"{file_unit!r} ({src}), outside the {lo:g}-{hi:g} g of "
-                                 f"strong-motion records: {verdict}{hint}{_ALLOW}")
-    record = dict(format=fmt, file=str(path), unit_in_file=file_unit,
-                  header_pga=None if ch.header_peak is None else ch.header_peak * factor,
-                  uneven=ch.times is not None)
-    return Samples(data, float(step), ch.station or path.stem, (ch.network or "")[:8],
-                   ch.channel or "", ch.starttime, record, processing)
+        out.append(_unusual(path, f"{label} would have PGA {pga_g:.3g} g with unit "
+                            f"{file_unit!r} ({src}), outside the {lo:g}-{hi:g} g of "
+                            f"strong-motion records: {verdict}{hint}", allow_unusual))
+    elif src != "given":
+        problem = unit_problem(peak, file_unit, src, ch.header_peak is not None)
+        if problem:
+            out.append(_unusual(path, f"{label}: {problem}", allow_unusual))
+    problem = motion_problem(data, step, f"with unit {file_unit!r} ({src})")
+    if problem:
+        out.append(_unusual(path, f"{label}: {problem}", allow_unusual))
+    return out
 
 
 def check_finite(data, label: str = "record", dt: float | None = None,

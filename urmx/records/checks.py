@@ -54,6 +54,7 @@ TYPICAL_PGA_G = (0.05, 1.5)
 #: units a factor 9.81 or 100 apart: stated unit -> [(other unit, values in it / in this)]
 _NEIGHBOURS = {"g": [("m/s2", 1.0 / 9.80665)], "m/s2": [("g", 9.80665), ("cm/s2", 0.01)],
                "cm/s2": [("m/s2", 100.0)]}
+_TO_SI = {"g": 9.80665, "m/s2": 1.0, "cm/s2": 0.01}
 #: SEED instrument codes (the channel code's second letter) of sensors that do not
 #: measure acceleration, and what they are
 _NOT_ACCELEROMETERS = {"H": "a high-gain seismometer (velocity)",
@@ -66,25 +67,47 @@ _SAC_IDEP = {6: ("IDISP", "displacement"), 7: ("IVEL", "velocity"),
              50: ("IVOLTS", "volts"), 8: ("IACC", "acceleration")}
 
 
+def _detrend(x: np.ndarray, block: int = 1 << 16) -> None:
+    """Remove the least-squares straight line from `x` in place (over the sample index),
+    a block at a time: no temporary of the record's length."""
+    n = x.size
+    sx = sxt = 0.0
+    for k in range(0, n, block):
+        seg = x[k:k + block]
+        sx += float(seg.sum())
+        sxt += float(np.dot(np.arange(k, k + seg.size, dtype=float), seg))
+    st, stt = n * (n - 1) / 2.0, (n - 1) * n * (2 * n - 1) / 6.0
+    slope = (n * sxt - st * sx) / (n * stt - st * st)
+    icpt = (sx - slope * st) / n
+    for k in range(0, n, block):
+        seg = x[k:k + block]
+        seg -= icpt + slope * np.arange(k, k + seg.size, dtype=float)
+
+
 def motion(acc: np.ndarray, dt: float) -> tuple[float, float]:
     """(PGV [m s-1], PGD [m]) of an acceleration [m s-2] with time step `dt` [s] after a
     baseline correction: a least-squares straight line removed from the acceleration,
     then from its integral (trapezoids); the displacement is the integral of that
-    velocity. O(N) memory (a few arrays of the record's length)."""
-    n = acc.size
-    if n < 3:
+    velocity. Two arrays of the record's length besides `acc` (rule 7 of the README's
+    "Errors")."""
+    if acc.size < 3:
         return 0.0, 0.0
-    t = np.arange(n, dtype=float)
-    a = acc - np.polyval(np.polyfit(t, acc, 1), t)
-    v = np.empty(n)
-    v[0] = 0.0
-    np.cumsum(0.5 * (a[1:] + a[:-1]) * dt, out=v[1:])
-    v -= np.polyval(np.polyfit(t, v, 1), t)
-    d = np.empty(n)
-    d[0] = 0.0
-    np.cumsum(0.5 * (v[1:] + v[:-1]) * dt, out=d[1:])
-    d -= d[0]
-    return float(np.max(np.abs(v))), float(np.max(np.abs(d)))
+    a = np.array(acc, dtype=float)
+    _detrend(a)
+    # trapezoids: v[k] = dt (a_0 + ... + a_k - a_0 / 2 - a_k / 2)
+    v = np.cumsum(a)
+    a *= 0.5
+    v -= a
+    v -= a[0]
+    v *= dt
+    _detrend(v)
+    pgv = float(np.max(np.abs(v)))
+    d = np.cumsum(v, out=a)  # a is no longer needed: its buffer holds the displacement
+    v *= 0.5
+    d -= v
+    d -= v[0]
+    d *= dt
+    return pgv, float(np.max(np.abs(d)))
 
 
 def motion_problem(acc: np.ndarray, dt: float, reading: str) -> str | None:
@@ -105,11 +128,9 @@ def unit_problem(peak: float, unit: str, source: str, confirmed: bool) -> str | 
     `source`) gives an implausible PGA in that unit and a typical one in a unit a factor
     9.81 or 100 away (both readings shown), else None; `confirmed`: the header states the
     peak in the unit too."""
-    from .readers import UNIT_FACTORS
-
     if confirmed or unit not in _NEIGHBOURS:
         return None
-    pga = peak * UNIT_FACTORS[unit] / 9.80665
+    pga = peak * _TO_SI[unit] / 9.80665
     if LOW_PGA_G <= pga <= HIGH_PGA_G:
         return None
     lo, hi = TYPICAL_PGA_G

@@ -478,7 +478,7 @@ def test_index_a_folder_and_load_every_id(suite, capsys, monkeypatch):
         assert loaded.stats.delta == direct.stats.delta
     monkeypatch.setenv("URMX_RECORDS", str(suite))
     assert main(["records", "list", "--set", "own"]) == 0
-    assert capsys.readouterr().out.count("\n") == 2 + 10  # the folder line, the heading, the records
+    assert capsys.readouterr().out.count("\n") == 2 + 10  # folder line, heading, records
     (suite / "plain" / "elcentro.dat").write_text("1\n2\n")  # edited since: refused
     with pytest.raises(R.ChecksumError, match="own-elcentro"):
         R.load("own-elcentro", suite)

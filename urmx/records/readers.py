@@ -738,7 +738,7 @@ _PEER_LINE4_WEST2 = re.compile(r"^\s*(?P<npts>\S+)\s+(?P<dt>\S+)\s+NPTS\s*,\s*DT
 
 
 def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
-    if len(lines) < 5:
+    if len(lines) < 4:
         raise TruncatedRecordError(path, "PEER AT2 file ends inside its 4-line header")
     m = _PEER_LINE4.search(lines[3]) or _PEER_LINE4_WEST2.search(lines[3])
     if not m:
@@ -748,8 +748,11 @@ def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     if not npts_tok.isdigit():
         raise RecordError(path, f"PEER AT2 line 4: NPTS={npts_tok!r} is not a whole number: "
                           f"{lines[3].strip()!r}")
+    if int(npts_tok) < 2:
+        raise PointCountError(path, f"PEER AT2 line 4 states NPTS= {int(npts_tok)}: a record "
+                              f"has at least 2 samples ({lines[3].strip()!r})")
     dt = _number(dt_tok)
-    if dt is None:
+    if dt is None:  # a number that is not a positive time step is said by _checked
         raise RecordError(path, f"PEER AT2 line 4: time step DT={_not_a_number(dt_tok)}: "
                           f"{lines[3].strip()!r}")
     if re.search(r"VELOCITY|DISPLACEMENT", lines[2], re.I):
@@ -758,13 +761,33 @@ def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     unit_m = re.search(r"UNITS OF\s+(\S+)", lines[2], re.I)
     unit = _unit_name(unit_m.group(1)) if unit_m else None
     if unit is None:
-        raise RecordUnitError(path, f"PEER AT2 header states an unknown unit: {lines[2]!r}")
+        quantity = _quantity_of(unit_m.group(1)) if unit_m else None
+        raise (UnusualRecordError if quantity else RecordUnitError)(
+            path, f"PEER AT2 line 3 states " + (f"a unit of {quantity}, not acceleration: "
+                                               if quantity else "an unknown unit: ")
+            + repr(lines[2].strip()))
+    if len(lines) < 5:
+        raise TruncatedRecordError(path, f"PEER AT2 file ends after its 4-line header: no "
+                                   f"samples, though line 4 states NPTS= {int(npts_tok)}")
     values = _values(path, lines[4:], 5, "PEER AT2")
     parts = [p.strip() for p in lines[1].split(",")]
     return [_Channel(values, unit, dt, npts_header=int(npts_tok),
                      station=parts[2] if len(parts) > 2 else "",
                      channel=_component(parts[-1]) if len(parts) > 1 else "",
-                     note=lines[1].strip())]
+                     note=lines[1].strip(), extra={"unit_source": "line 3"})]
+
+
+def _quantity_of(unit_text: str) -> str | None:
+    """The quantity a unit that is not an acceleration names (``CM/S``: velocity, ``CM``:
+    displacement, ``COUNTS``), or None."""
+    t = unit_text.strip().strip("()[],.;:").lower().replace(" ", "").replace("sec", "s")
+    if re.fullmatch(r"(m|cm|mm|um|nm|in|ft)/s", t):
+        return "velocity"
+    if re.fullmatch(r"(m|cm|mm|um|nm|in|ft)", t):
+        return "displacement"
+    if t in ("counts", "count", "digits"):
+        return "counts"
+    return None
 
 
 def _parse_geonet(path: Path, lines: list[str]) -> list[_Channel]:
@@ -824,7 +847,12 @@ def _parse_cosmos(path: Path, lines: list[str]) -> list[_Channel]:
     i += 1 + n_comment
     head = lines[i]
     npts = int(_find(r"^\s*(\d+)", head)[0])
-    unit = _unit_name(_find(r"units\s*=\s*([^(,]+)", head)[0])
+    stated = _find(r"units\s*=\s*([^(,]+)", head)[0]
+    unit = _unit_name(stated)
+    if unit is None and _quantity_of(stated):
+        raise UnusualRecordError(path, f"COSMOS data header states units={stated.strip()} "
+                                 f"({_quantity_of(stated)}), not an acceleration: read the "
+                                 ".acc file of the record")
     per_line, width = map(int, _find(r"Format\s*=\s*\((\d+)[EF](\d+)", head))
     data = lines[i + 1:i + 1 + math.ceil(npts / per_line)]
     values = _fixed(path, data, width, first=i + 2)
@@ -1355,6 +1383,7 @@ def _parse_obspy(path: Path, format: str | None, raw: bytes,
                             unit_from_file=unit is not None, note=note,
                             extra={"dt_source": f"{format.upper()} header",
                                    "unit_source": f"response {Path(str(response)).name}",
+                                   "unit_confirmed": inventory is not None,
                                    "problems": problems}))
     return out
 
@@ -1538,7 +1567,8 @@ def _plausible(path: Path, label: str, ch: _Channel, values: np.ndarray, data: n
                             f"{file_unit!r} ({src}), outside the {lo:g}-{hi:g} g of "
                             f"strong-motion records: {verdict}{hint}", allow_unusual))
     elif src != "given":
-        problem = unit_problem(peak, file_unit, src, ch.header_peak is not None)
+        confirmed = ch.header_peak is not None or bool(ch.extra.get("unit_confirmed"))
+        problem = unit_problem(peak, file_unit, src, confirmed)
         if problem:
             out.append(_unusual(path, f"{label}: {problem}", allow_unusual))
     problem = motion_problem(data, step, f"with unit {file_unit!r} ({src})")

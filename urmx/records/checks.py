@@ -26,8 +26,8 @@ urmx integrates is a simple baseline correction (the mean removed from the accel
 a straight line from the velocity), not the processing of those papers: it removes the
 drift a raw integration of an offset or a tilted baseline has, and gives El Centro 1940
 S00E a PGV of 0.333 m/s (the published 0.335 m/s). A record it finds several times beyond
-the bounds is beyond them after any reasonable processing. A velocity sensor's counts read as cm/s2 give
-PGV of 10^3 m/s, hundreds of times the bound.
+the bounds is beyond them after any reasonable processing. A velocity sensor's counts read
+as cm/s2 give PGV of 10^3 m/s, hundreds of times the bound.
 
 The unit agreement check (issue 34, rule 4): a stated unit is refused, with both readings
 shown, when the values imply an implausible record in it (PGA above :data:`HIGH_PGA_G`,

@@ -763,7 +763,7 @@ def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     if unit is None:
         quantity = _quantity_of(unit_m.group(1)) if unit_m else None
         raise (UnusualRecordError if quantity else RecordUnitError)(
-            path, f"PEER AT2 line 3 states " + (f"a unit of {quantity}, not acceleration: "
+            path, "PEER AT2 line 3 states " + (f"a unit of {quantity}, not acceleration: "
                                                if quantity else "an unknown unit: ")
             + repr(lines[2].strip()))
     if len(lines) < 5:

@@ -17,6 +17,7 @@ import pytest
 
 import urmx
 import urmx.records as R
+from urmx.config import data_dir
 from urmx.errors import InputError
 from urmx.records import checks
 
@@ -335,3 +336,25 @@ def test_no_catalog_wall_or_diaphragm_trips_the_new_bounds():
     flexible = [s.wall.diaphragm_frequency() for s in cat.walls.values()
                 if np.isfinite(s.wall.diaphragm_frequency())]
     assert max(flexible) <= MAX_DIAPHRAGM_FREQUENCY
+
+
+def test_format_says_what_sniffing_cannot(records_dir, tmp_path, capsys):
+    """An AT2 whose first line is not PEER's and whose fourth is in the NGA-West2 order
+    ("10800  .0050  NPTS, DT") is no format urmx can tell from its first bytes; --format
+    peer reads it, in `urmx records show` and `urmx simulate` alike."""
+    from urmx.cli import main
+
+    src = Path(R.manifest(records_dir)["christchurch"]["path"])
+    lines = src.read_bytes().split(b"\r\n")
+    lines[0], lines[3] = b"Darfield 2010, PRPC W", b"  10800   .0050   NPTS, DT"
+    odd = tmp_path / "prpc.txt"
+    odd.write_bytes(b"\r\n".join(lines))
+    assert main(["records", "show", str(odd)]) == 2
+    assert "unknown record format" in capsys.readouterr().err
+    assert main(["records", "show", str(odd), "--format", "peer"]) == 0
+    out = capsys.readouterr().out
+    assert "(peer channel W), dt 0.005 s, 10800 points" in out and "0.1981 g" in out
+    wall = data_dir("catalog") / "examples/benchmark-wall.toml"
+    assert main(["simulate", str(wall), str(odd), "--format", "peer"]) == 0
+    assert main(["simulate", str(wall), "christchurch", "--format", "peer"]) == 2
+    assert "--format and --response apply to record files" in capsys.readouterr().err

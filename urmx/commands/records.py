@@ -21,10 +21,17 @@ def file_options(s, what: str = "a record file") -> None:
     s.add_argument("--unit", choices=UNITS, help=f"unit of {what} that does not state it")
     s.add_argument("--channel", metavar="NAME",
                    help="channel of a multi-channel file (GeoNet, CDMG, ...): required there")
+    s.add_argument("--format", metavar="FORMAT",
+                   help="what the file is, when its first bytes do not say: peer, geonet, "
+                        "cosmos, dmg, smc, knet, columns, or an ObsPy format (MSEED, SAC, ...)")
+    s.add_argument("--response", metavar="FILE.xml",
+                   help="StationXML whose instrument response turns the counts of a MiniSEED "
+                        "(or other ObsPy-format) file into acceleration")
     s.add_argument("--allow-unusual", action="store_true",
-                   help="read a record whose time step is outside 0.0001-0.1 s or whose PGA "
-                        "is outside 0.001-10 g (refused otherwise: nearly always a unit "
-                        "mistake)")
+                   help="read a record whose time step is outside 0.0001-0.1 s, whose PGA "
+                        "is outside 0.001-10 g, whose PGV or PGD is beyond strong motion, "
+                        "or whose header says it is no acceleration (refused otherwise: "
+                        "nearly always a mistake; the override is recorded)")
 
 
 def record_inputs(name: str, records_dir=None) -> list[tuple[str, object]]:
@@ -98,8 +105,9 @@ def _trace(args):
 
     path = Path(args.id)
     if path.is_file():
-        return read_channel(path, dt=args.dt, unit=args.unit, channel=args.channel,
-                            allow_unusual=args.allow_unusual).trace()
+        return read_channel(path, args.format, dt=args.dt, unit=args.unit,
+                            channel=args.channel, allow_unusual=args.allow_unusual,
+                            response=args.response).trace()
     try:
         known = manifest(args.records)
     except MissingFileError:
@@ -110,9 +118,10 @@ def _trace(args):
         if path.exists():
             raise InputError(f"{args.id!r} is a folder, not a record file")
         return load(args.id, args.records)  # unknown ids: the manifest's "did you mean"
-    if args.dt is not None or args.unit is not None or args.allow_unusual:
-        raise InputError(f"--dt, --unit and --allow-unusual apply to record files; "
-                         f"{args.id!r} is a manifest record that states its own")
+    if args.dt is not None or args.unit is not None or args.allow_unusual or \
+            args.format is not None or args.response is not None:
+        raise InputError(f"--dt, --unit, --format, --response and --allow-unusual apply to "
+                         f"record files; {args.id!r} is a manifest record that states its own")
     return load(args.id, args.records, channel=args.channel)
 
 

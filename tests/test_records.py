@@ -16,7 +16,7 @@ from urmx.config import shipped_records
 G_N = 9.80665  # standard gravity g_n [m s-2] (records in units of g)
 
 
-# -- every file of shared/records, against PROVENANCE.md ----------------------------------
+# -- the shared collection's format samples, against its PROVENANCE.md ----------------------------------
 # (file, read kwargs, channel, dt [s], npts, PGA [g] from PROVENANCE.md)
 PROVENANCE = [
     ("elcentro1940/elcentro_S00E_1940.dat", {"dt": 0.02, "unit": "cm/s2"}, "", 0.02, 2688,
@@ -406,16 +406,16 @@ def test_obspy_formats_and_columns(tmp_path):
 
 
 def test_relative_records_folder_is_made_absolute(tmp_path, monkeypatch):
-    """A relative $URMX_RECORDS (the README's `URMX_RECORDS=../shared/records`) means the
+    """A relative $URMX_RECORDS (`URMX_RECORDS=../my/records`) means the
     caller's working folder; records_dir returns it absolute, so that a worker or notebook
     kernel started in another folder reads the same one."""
     from urmx.config import records_dir
 
-    (tmp_path / "shared" / "records").mkdir(parents=True)
+    (tmp_path / "my" / "records").mkdir(parents=True)
     (tmp_path / "checkout").mkdir()
     monkeypatch.chdir(tmp_path / "checkout")
-    monkeypatch.setenv("URMX_RECORDS", "../shared/records")
+    monkeypatch.setenv("URMX_RECORDS", "../my/records")
     found = records_dir()
     assert found.is_absolute()
     monkeypatch.chdir(tmp_path)  # elsewhere, the returned path names the same folder
-    assert found.is_dir() and found.resolve() == (tmp_path / "shared" / "records").resolve()
+    assert found.is_dir() and found.resolve() == (tmp_path / "my" / "records").resolve()

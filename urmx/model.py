@@ -1,4 +1,4 @@
-"""The wall model of ``shared/design/MODEL.md`` sections 1-6.
+"""The wall model of ``docs/MODEL.md`` sections 1-6.
 
 `Wall` is the immutable, validated description of one wall and its two supports.
 Everything the integrators need is packed into a flat float64 parameter vector

@@ -16,7 +16,7 @@ from urmx.config import shipped_records
 G_N = 9.80665  # standard gravity g_n [m s-2] (records in units of g)
 
 
-# -- the shared collection's format samples, against its PROVENANCE.md ----------------------------------
+# -- the shared collection's format samples, against its PROVENANCE.md ---------------
 # (file, read kwargs, channel, dt [s], npts, PGA [g] from PROVENANCE.md)
 PROVENANCE = [
     ("elcentro1940/elcentro_S00E_1940.dat", {"dt": 0.02, "unit": "cm/s2"}, "", 0.02, 2688,

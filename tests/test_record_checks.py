@@ -358,3 +358,33 @@ def test_format_says_what_sniffing_cannot(records_dir, tmp_path, capsys):
     assert main(["simulate", str(wall), str(odd), "--format", "peer"]) == 0
     assert main(["simulate", str(wall), "christchurch", "--format", "peer"]) == 2
     assert "--format and --response apply to record files" in capsys.readouterr().err
+
+
+def test_cosmos_velocity_units_are_refused(shared_records, tmp_path):
+    src = shared_records / "formats/cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c"
+    text = src.read_text(encoding="latin-1")
+    assert R.read(src)[0].stats.channel == "BNZ"
+    odd = tmp_path / "vel.V2c"
+    odd.write_text(text.replace("units=cm/sec2", "units=cm/sec", 1), encoding="latin-1")
+    with pytest.raises(R.UnusualRecordError, match=r"states units=cm/sec \(velocity\), not an "
+                       "acceleration"):
+        R.read(odd)
+
+
+def test_records_list_says_which_folder_each_record_comes_from(tmp_path, capsys):
+    """A folder of the user's that holds one manifest record (El Centro): that record comes
+    from it, every other from the shipped records."""
+    from urmx.cli import main
+    from urmx.config import shipped_records
+
+    mine = tmp_path / "mine"
+    (mine / "elcentro1940").mkdir(parents=True)
+    name = "elcentro1940/elcentro_S00E_1940.dat"
+    (mine / name).write_bytes((shipped_records() / name).read_bytes())
+    assert main(["records", "list", "--records", str(mine), "--set", "paper"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == f"yours: 1 records from {mine} (your records folder)"
+    assert out[1] == f"shipped: 2 records from {shipped_records()} (shipped with urmx)"
+    assert out[3].split()[:2] == ["elcentro", "yours"]
+    assert out[4].split()[:2] == ["nahanni", "shipped"]
+    assert R.load("elcentro", mine).stats.npts == 2688

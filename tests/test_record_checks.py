@@ -165,13 +165,13 @@ def test_at2_header_and_values_must_agree(records_dir, tmp_path):
     both readings, and read on purpose with allow_unusual (the override kept)."""
     src = Path(R.manifest(records_dir)["christchurch"]["path"])
     in_ms2 = _at2(tmp_path, src, "ms2.AT2", factor=9.80665)
-    with pytest.raises(R.UnusualRecordError, match=r"states unit 'g' \(line 3\), which makes "
+    with pytest.raises(R.UnusualRecordError, match=r"states unit 'g' \(header\), which makes "
                        r"it an unusually strong record of PGA 1.94 g; read as m/s2 its PGA "
                        r"would be 0.198 g"):
         R.read(in_ms2)
     units_line = "ACCELERATION TIME SERIES IN UNITS OF M/S2\n"
     in_g = _at2(tmp_path, src, "g.AT2", unit_line=units_line)
-    with pytest.raises(R.UnusualRecordError, match=r"states unit 'm/s2' \(line 3\), which "
+    with pytest.raises(R.UnusualRecordError, match=r"states unit 'm/s2' \(header\), which "
                        r"makes it a weak record of PGA 0.0202 g; read as g its PGA would be "
                        r"0.198 g"):
         R.read(in_g)

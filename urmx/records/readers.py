@@ -774,7 +774,7 @@ def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     return [_Channel(values, unit, dt, npts_header=int(npts_tok),
                      station=parts[2] if len(parts) > 2 else "",
                      channel=_component(parts[-1]) if len(parts) > 1 else "",
-                     note=lines[1].strip(), extra={"unit_source": "line 3"})]
+                     note=lines[1].strip())]
 
 
 def _quantity_of(unit_text: str) -> str | None:

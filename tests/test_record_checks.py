@@ -69,6 +69,8 @@ def test_seismometer_files_are_refused(path, channel, what):
     Now the channel code or the header says what they are."""
     with pytest.raises(R.UnusualRecordError, match=what):
         R.read(path, unit="cm/s2", channel=channel)
+    tr = R.read(path, unit="cm/s2", channel=channel, allow_unusual=True)[0]
+    assert what in next(s for s in tr.stats.processing if "overrode" in s)
 
 
 def test_an_override_keeps_every_problem_in_the_processing():
@@ -83,6 +85,8 @@ def test_an_override_keeps_every_problem_in_the_processing():
 def test_gse_calibration_is_refused():
     with pytest.raises(R.UnusualRecordError, match=r"instrument calibration \(CALIB 7.248"):
         R.read(GSE_CALIB, unit="cm/s2")
+    tr = R.read(GSE_CALIB, unit="cm/s2", allow_unusual=True)[0]
+    assert any("overrode" in s and "CALIB 7.248" in s for s in tr.stats.processing)
 
 
 def _response_inventory(tmp_path: Path, gain: float) -> Path:
@@ -112,6 +116,9 @@ def test_accelerometer_miniseed_needs_its_response(tmp_path):
     with pytest.raises(R.UnusualRecordError, match=r"integers \(int32\) and no instrument "
                        "response"):
         R.read(MSEED_HNZ, unit="m/s2")
+    forced = R.read(MSEED_HNZ, unit="m/s2", allow_unusual=True)[0]
+    assert any("overrode" in s and "no instrument response" in s
+               for s in forced.stats.processing)
     gain = 400.0  # counts per m s-2: the record's +-857 counts about its mean are 2.1 m/s2
     tr = R.read(MSEED_HNZ, response=_response_inventory(tmp_path, gain))[0]
     assert tr.stats.channel == "HNZ"

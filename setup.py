@@ -1,8 +1,8 @@
 """Build hook: a built urmx carries its data as package data.
 
 The catalog (every file of ``catalog/``: walls, diaphragms, building, studies,
-paper.toml, examples) and the record manifest (``records/manifest.toml``) have one source, the top-level
-folders of the checkout. Building a wheel (``pip install .``, ``pip wheel .``, ``python -m
+paper.toml, examples) and the records (every file of ``records/``: the manifest, the record
+files it names, PROVENANCE.md) have one source, the top-level folders of the checkout. Building a wheel (``pip install .``, ``pip wheel .``, ``python -m
 build``) copies them into the build tree as ``urmx/_data/catalog/`` and
 ``urmx/_data/records/``, where `urmx.config.data_dir` finds them with
 `importlib.resources`; nothing is copied in git. An editable install (``pip install -e .``)
@@ -17,7 +17,7 @@ from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
 #: folder -> the files of it a wheel carries, under urmx/_data/<folder>/
-DATA = {"catalog": "**/*", "records": "manifest.toml"}
+DATA = {"catalog": "**/*", "records": "**/*"}
 
 
 def data_files() -> list[Path]:

@@ -12,14 +12,23 @@ import urmx
 from urmx.guard import benchmark_wall
 
 from .fixtures import studies
-from .fixtures.records import records_folder
+from .fixtures.records import records_folder, shared_folder
 
 
 @pytest.fixture(scope="session")
 def records_dir() -> Path:
-    """The ground-motion records folder (``$URMX_RECORDS``); when it is missing the test
-    fails if the environment variable ``CI`` is set and skips otherwise."""
+    """The records folder manifest ids resolve against (``$URMX_RECORDS``, else the
+    records the repository ships); a named folder that is missing fails the test if the
+    environment variable ``CI`` is set and skips it otherwise."""
     return records_folder()
+
+
+@pytest.fixture(scope="session")
+def shared_records() -> Path:
+    """The shared records folder with the format samples the repository does not ship
+    (``$URMX_RECORDS``, else ``shared/records`` beside the checkout); missing, it fails the
+    test under CI and skips it elsewhere."""
+    return shared_folder()
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,7 @@ from urmx import fragility_report as FR
 from urmx import paper as P
 from urmx.catalog import CatalogError, load_study
 from urmx.cli import main
-from urmx.config import project_root
+from urmx.config import project_root, shipped_records
 from urmx.config import records_dir as _records_dir
 
 AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
@@ -374,9 +374,11 @@ def test_urmx_toml_without_records_dir_says_so(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("URMX_RECORDS", raising=False)
     (tmp_path / "urmx.toml").write_text('record_dir = "/data/records"\n')
-    with pytest.raises(E.MissingFileError, match="urmx.toml has no records_dir \\(it has "
-                                                  "'record_dir': a misspelling\\?\\)"):
+    with pytest.raises(E.InputError, match="urmx.toml has no records_dir \\(it has "
+                                            "'record_dir': a misspelling\\?\\)"):
         _records_dir()
+    (tmp_path / "urmx.toml").write_text('workers = 2\n')  # no records key: the shipped ones
+    assert _records_dir() == shipped_records()
     (tmp_path / "records").mkdir()
     (tmp_path / "urmx.toml").write_text('records_dir = "records"\n')
     assert _records_dir() == tmp_path / "records"

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from .fixtures.records import record_file, records_folder
+from urmx.config import shipped_records
+
+from .fixtures import records as fixture
+from .fixtures.records import record_file, records_folder, shared_folder
 
 
 @pytest.mark.parametrize("ci", ["true", "1"])
@@ -14,9 +17,8 @@ def test_missing_records_fail_under_ci(monkeypatch, tmp_path, ci):
     with pytest.raises(pytest.fail.Exception, match=r"URMX_RECORDS.*CI is set"):
         records_folder()
     monkeypatch.delenv("URMX_RECORDS")
-    monkeypatch.chdir(tmp_path)  # no urmx.toml here either
-    with pytest.raises(pytest.fail.Exception, match="set URMX_RECORDS"):
-        records_folder()
+    monkeypatch.chdir(tmp_path)  # no urmx.toml here either: the shipped records
+    assert records_folder() == shipped_records()
 
 
 @pytest.mark.parametrize("ci", [None, "", "false", "0"])
@@ -30,9 +32,14 @@ def test_missing_records_skip_elsewhere(monkeypatch, tmp_path, ci):
         records_folder()
 
 
-def test_a_missing_file_in_the_folder_fails_under_ci(monkeypatch, tmp_path):
-    monkeypatch.setenv("CI", "true")
+def test_a_missing_shared_folder_fails_under_ci(monkeypatch, tmp_path):
+    """The shared folder is found by its format samples; a folder without them (and no
+    shared folder beside the checkout) fails under CI, skips elsewhere."""
     monkeypatch.setenv("URMX_RECORDS", str(tmp_path))
-    assert records_folder() == tmp_path
-    with pytest.raises(pytest.fail.Exception, match="elcentro.dat is missing"):
+    monkeypatch.setattr(fixture, "MARKER", "no/such/sample.AT2")
+    monkeypatch.setenv("CI", "true")
+    with pytest.raises(pytest.fail.Exception, match="sample.AT2.*CI is set"):
+        shared_folder()
+    monkeypatch.setenv("CI", "")
+    with pytest.raises(pytest.skip.Exception, match="shared records folder"):
         record_file("elcentro.dat")

@@ -1,8 +1,9 @@
 """urmx installed from a built wheel, outside the checkout: the wheel carries the catalog and
-the record manifest (setup.py copies them into ``urmx/_data/``), and ``urmx records list``,
-``urmx simulate`` of a catalog wall under a manifest record and ``urmx run`` of a catalog
-study give the checkout's numbers; outputs go to the current folder, never into the
-package."""
+the records (the manifest and its record files; setup.py copies them into ``urmx/_data/``),
+and ``urmx records list``, ``urmx simulate`` of a catalog wall under a manifest record and
+``urmx run`` of a catalog study work with no records folder set and give the checkout's
+numbers; outputs go to the current folder, never into the package. And the README's
+Quick start, as written, from a clone with nothing beside it."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ import pytest
 import xarray as xr
 
 import urmx
+import urmx.records
 from urmx.cli import main
 from urmx.config import checkout, data_dir
 
@@ -72,11 +74,15 @@ def installed(wheel, tmp_path_factory) -> Path:
     return target
 
 
-def _urmx(target: Path, cwd: Path, *args: str, records: Path) -> subprocess.CompletedProcess:
+def _urmx(target: Path, cwd: Path, *args: str,
+          records: Path | None = None) -> subprocess.CompletedProcess:
     """``urmx ARGS`` of the installed wheel (its console script), run in `cwd` with only
-    the install on PYTHONPATH."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR")}
-    env.update(PYTHONPATH=str(target), URMX_RECORDS=str(records), MPLBACKEND="Agg")
+    the install on PYTHONPATH, and no records folder set unless `records` is given."""
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR", "URMX_RECORDS")}
+    env.update(PYTHONPATH=str(target), MPLBACKEND="Agg")
+    if records is not None:
+        env["URMX_RECORDS"] = str(records)
     return subprocess.run([sys.executable, str(target / "bin" / "urmx"), *args], cwd=cwd,
                           env=env, capture_output=True, text=True, timeout=900)
 
@@ -89,6 +95,9 @@ def test_the_wheel_carries_the_catalog_and_the_manifest(wheel):
     assert "urmx/_data/catalog/studies/verification.toml" in catalog
     assert catalog <= names
     assert "urmx/_data/records/manifest.toml" in names
+    assert "urmx/_data/records/PROVENANCE.md" in names
+    shipped = {f"urmx/_data/records/{e['file']}" for e in urmx.records.manifest().values()}
+    assert len(shipped) == 47 and shipped <= names  # every record file of the manifest
     assert "urmx/variables.toml" in names
     assert not any(n.startswith(("catalog/", "records/", "tests/", "benchmarks/"))
                    for n in names)
@@ -117,14 +126,15 @@ def test_installed_wheel_runs_outside_the_checkout(installed, tmp_path, records_
     assert Path(where).is_relative_to(installed)  # not the checkout's editable urmx
     assert Path(catalog) == installed / "urmx" / "_data" / "catalog" and root == "None"
 
-    listed = _urmx(installed, work, "records", "list", records=records_dir)
+    listed = _urmx(installed, work, "records", "list")  # no records folder set
     assert listed.returncode == 0, listed.stderr
-    assert main(["records", "list", "--records", str(records_dir)]) == 0
-    assert listed.stdout == capsys.readouterr().out
-    assert "elcentro" in listed.stdout and "p695-01-mul009" in listed.stdout
+    shipped = installed / "urmx" / "_data" / "records"
+    assert listed.stdout.startswith(f"shipped: 51 records from {shipped} (shipped with urmx)")
+    assert "elcentro               shipped paper" in listed.stdout
+    assert "p695-01-mul009" in listed.stdout
 
     sim = _urmx(installed, work, "simulate", "benchmark-wall.toml", "elcentro", "--scale",
-                "0.5", "--out", "run.nc", records=records_dir)
+                "0.5", "--out", "run.nc")
     assert sim.returncode == 0, sim.stderr
     assert main(["simulate", str(ROOT / "catalog/examples/benchmark-wall.toml"), "elcentro",
                  "--scale", "0.5", "--records", str(records_dir),
@@ -143,7 +153,7 @@ def test_installed_wheel_runs_outside_the_checkout(installed, tmp_path, records_
         assert a.sizes["time"] > 1000
 
     study = _urmx(installed, work, "run", "verification", "--out", "verification.nc",
-                  "--scheduler", "serial", "--quiet", records=records_dir)
+                  "--scheduler", "serial", "--quiet")
     assert study.returncode == 0, study.stderr
     assert main(["run", "verification", "--out", str(tmp_path / "verification.nc"),
                  "--scheduler", "serial", "--quiet", "--records", str(records_dir)]) == 0
@@ -153,11 +163,11 @@ def test_installed_wheel_runs_outside_the_checkout(installed, tmp_path, records_
         assert int((a.status <= 1).sum()) == 63  # 3 walls, each under its record, 21 CORs
 
     # an output the command is not told where to put goes to the current folder
-    cal = _urmx(installed, work, "calibrate", records=records_dir)
+    cal = _urmx(installed, work, "calibrate")
     assert cal.returncode == 0, cal.stderr
     assert (work / "reports" / "calibration.md").is_file()
     assert not list(installed.glob("reports")) and not list(installed.glob("results"))
-    bench = _urmx(installed, work, "bench", "kernel", records=records_dir)
+    bench = _urmx(installed, work, "bench", "kernel")
     assert bench.returncode == 2 and len(bench.stderr.strip().splitlines()) == 1
     assert "source checkout" in bench.stderr
 
@@ -174,3 +184,66 @@ def test_what_needs_a_checkout_says_so_in_one_line(tmp_path, monkeypatch, capsys
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1
     assert "guard --update needs a source checkout of urmx" in err
+
+
+#: what the clone's test run is limited to (module docstring of the test below)
+QUICK_START_SUBSET = ("tests/test_fixtures.py "
+                      "tests/test_records.py::test_shipped_records_are_the_manifests "
+                      "tests/test_records.py::test_load_paper_records "
+                      "tests/test_record_checks.py::test_csv_with_a_header_row_reads_as_the_"
+                      "bare_numbers")
+
+
+def quick_start_commands(readme: Path = ROOT / "README.md") -> list[str]:
+    """The README's Quick start commands, as written: the indented lines of its "Quick
+    start" section that make a virtual environment."""
+    text = readme.read_text(encoding="utf-8")
+    section = text.split("\n## Quick start", 1)[1].split("\n## ", 1)[0]
+    return [ln.strip() for ln in section.splitlines()
+            if ln.startswith("    ") and ln.strip().startswith("python3 -m venv")]
+
+
+def test_the_readme_names_two_quick_start_commands_and_nothing_outside():
+    commands = quick_start_commands()
+    assert len(commands) == 2
+    assert commands[0].endswith("urmx paper") and "pytest" in commands[1]
+    for c in commands:
+        assert "URMX_RECORDS" not in c and ".." not in c
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "../shared" not in readme and "shared/design" not in readme
+
+
+@pytest.mark.slow
+def test_quick_start_from_a_clone(tmp_path):
+    """The README's two Quick start commands, as written, in a clone of the repository in
+    an empty folder (no ``../shared``), without ``URMX_RECORDS`` or ``CI``, each making its
+    new virtual environment: both exit 0, and ``git status --porcelain`` is empty after them
+    (`urmx paper` rewrote its report to the same bytes).
+
+    The second command runs the test suite, this test among it. Run whole, it would run
+    the suite inside the suite (a recursion, and twice the CI time), so it runs here as
+    written but with ``PYTEST_ADDOPTS`` naming a small subset (`QUICK_START_SUBSET`: the
+    fixtures' guard rails, the shipped records against their manifest and provenance,
+    loading the paper's records, a CSV read) that needs nothing but the clone; ``.ci/run``
+    runs the same command whole. pip uses its cache and the configured package index (no
+    other network is needed)."""
+    clone = tmp_path / "empty" / "urmx"
+    clone.parent.mkdir()
+    subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True,
+                   capture_output=True, timeout=300)
+    assert not (clone.parent.parent / "shared").exists()
+    venv_bin = str(Path(sys.prefix) / "bin")
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("URMX_RECORDS", "PYTHONPATH", "VIRTUAL_ENV", "CI", "NUMBA_CACHE_DIR",
+                        "PYTEST_ADDOPTS", "PYTEST_CURRENT_TEST")}
+    env["PATH"] = os.pathsep.join(p for p in env["PATH"].split(os.pathsep) if p != venv_bin)
+    env["MPLBACKEND"] = "Agg"
+    first, second = quick_start_commands()
+    for command, extra in ((first, {}), (second, {"PYTEST_ADDOPTS": QUICK_START_SUBSET})):
+        proc = subprocess.run(["bash", "-c", command], cwd=clone, env={**env, **extra},
+                              capture_output=True, text=True, timeout=3000)
+        assert proc.returncode == 0, f"{command}\n{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}"
+    assert " passed" in proc.stdout and "failed" not in proc.stdout
+    status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True,
+                            text=True, check=True).stdout
+    assert status == "", status

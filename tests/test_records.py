@@ -11,11 +11,12 @@ import pytest
 
 import urmx.records as R
 from urmx import UrmxWarning
+from urmx.config import shipped_records
 
 G_N = 9.80665  # standard gravity g_n [m s-2] (records in units of g)
 
 
-# -- every file of shared/records, against PROVENANCE.md ----------------------------------
+# -- the shared collection's format samples, against its PROVENANCE.md ---------------
 # (file, read kwargs, channel, dt [s], npts, PGA [g] from PROVENANCE.md)
 PROVENANCE = [
     ("elcentro1940/elcentro_S00E_1940.dat", {"dt": 0.02, "unit": "cm/s2"}, "", 0.02, 2688,
@@ -58,8 +59,8 @@ PROVENANCE = [
 
 @pytest.mark.parametrize(("file", "kwargs", "channel", "dt", "npts", "pga_g"), PROVENANCE,
                          ids=[f"{p[0].split('/')[-1]}-{p[2]}" for p in PROVENANCE])
-def test_reads_provenance_record(records_dir, file, kwargs, channel, dt, npts, pga_g):
-    st = R.read(records_dir / file, **kwargs)
+def test_reads_provenance_record(shared_records, file, kwargs, channel, dt, npts, pga_g):
+    st = R.read(shared_records / file, **kwargs)
     tr = st.select(channel=channel)[0] if channel else st[0]
     assert tr.stats.delta == pytest.approx(dt, rel=1e-9)
     assert tr.stats.npts == npts
@@ -72,9 +73,9 @@ def test_reads_provenance_record(records_dir, file, kwargs, channel, dt, npts, p
                                   "formats/geonet/20161113_110259_WTMC_20.V2A",
                                   "formats/dmg/CE89146.V2", "formats/smc/0111a.smc",
                                   "formats/usc/017m30bt.s0a"])
-def test_pga_matches_header(records_dir, file):
+def test_pga_matches_header(shared_records, file):
     """Headers that state a peak agree with the data (AT2: PROVENANCE, no header peak)."""
-    for tr in R.read(records_dir / file):
+    for tr in R.read(shared_records / file):
         pga = np.abs(tr.data).max()
         header = tr.stats.record.header_pga
         if header is None:  # PEER AT2 headers carry no peak
@@ -89,9 +90,9 @@ def test_pga_matches_header(records_dir, file):
     ("formats/smc/891018_1.sma-1.0444a.smc", "065", 0.001, 0.0818),
     ("formats/usc/017m30cc.y0a", "N00W", 0.004, 0.4064),
 ])
-def test_uneven_records_resampled_with_warning(records_dir, file, channel, dt, pga_g):
+def test_uneven_records_resampled_with_warning(shared_records, file, channel, dt, pga_g):
     with pytest.warns(UrmxWarning, match="unevenly sampled"):
-        st = R.read(records_dir / file)
+        st = R.read(shared_records / file)
     tr = st.select(channel=channel)[0]
     assert tr.stats.delta == dt
     assert np.abs(tr.data).max() / G_N == pytest.approx(pga_g, rel=0.02)
@@ -109,9 +110,9 @@ def test_penzien_el_centro_comment_count_warns(records_dir):
     ("formats/cosmos/NP8040-n.1000hyfh.HNE.01.V0c", "raw digitiser counts"),
     ("formats/dmg/CE89146.V3", "spectra, no acceleration history"),
 ])
-def test_refused_files(records_dir, file, match):
+def test_refused_files(shared_records, file, match):
     with pytest.raises(R.UnsupportedRecordError, match=match) as err:
-        R.read(records_dir / file)
+        R.read(shared_records / file)
     assert Path(file).name in str(err.value)
 
 
@@ -159,10 +160,10 @@ def test_clear_errors(at2, make_kwargs, read_kwargs, error, match):
     assert str(path) in str(err.value)
 
 
-def test_truncated_real_files(records_dir, tmp_path):
+def test_truncated_real_files(shared_records, tmp_path):
     for name in ("formats/peer/RSN763_LOMAP_GIL067.AT2",
                  "formats/geonet/20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2"):
-        lines = (records_dir / name).read_bytes().splitlines(keepends=True)
+        lines = (shared_records / name).read_bytes().splitlines(keepends=True)
         cut = tmp_path / Path(name).name
         cut.write_bytes(b"".join(lines[: len(lines) // 2 + 7]))
         with pytest.raises(R.RecordError, match=str(cut)):
@@ -298,10 +299,35 @@ def test_checksum_mismatch_and_missing_file(records_dir, tmp_path):
     (fake / "elcentro_S00E_1940.dat").write_bytes(data.replace(b"12.540", b"12.541", 1))
     with pytest.raises(R.ChecksumError, match="elcentro_S00E_1940.dat.*satish-annigeri"):
         R.load("elcentro", tmp_path)
-    with pytest.raises(FileNotFoundError, match="NS1-010.*maddyblue/slammer"):
-        R.load("nahanni", tmp_path)
+    # the user's folder wins only for the records it holds: nahanni from the shipped one
+    assert R.load("nahanni", tmp_path).stats.npts == 4038
+    assert R.manifest(tmp_path)["nahanni"]["folder"] == str(shipped_records())
     with pytest.raises(R.ManifestError, match="did you mean"):
         R.load("elcentr", tmp_path)
+    own = tmp_path / "manifest.toml"  # a record of the folder's own manifest, file missing
+    entry = dict(R.manifest()["nahanni"], id="mine", file="gone/NS1-010")
+    R.write_manifest([entry], own)
+    with pytest.raises(FileNotFoundError, match="gone/NS1-010.*maddyblue/slammer"):
+        R.load("mine", tmp_path)
+
+
+def test_shipped_records_are_the_manifests():
+    """Every file of the shipped records folder is a record file of the manifest with its
+    SHA-256 (or one of the folder's own documents), and PROVENANCE.md lists each with that
+    SHA-256: the records travel with their attribution."""
+    import hashlib
+
+    folder = shipped_records()
+    entries = R.manifest(folder)
+    by_file = {e["file"]: e["sha256"] for e in entries.values()}
+    provenance = (folder / "PROVENANCE.md").read_text(encoding="utf-8")
+    own = {"manifest.toml", "PROVENANCE.md", "INGEST.md", "library/catalog.tsv"}
+    files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+    assert set(files) - own == set(by_file)  # no file without a record, no record without
+    for rel, digest in by_file.items():
+        assert hashlib.sha256((folder / rel).read_bytes()).hexdigest() == digest, rel
+        assert f"| `{rel}` |" in provenance and f"`{digest}`" in provenance, rel
+    assert len(by_file) == 47 and sum((folder / f).stat().st_size for f in by_file) < 4.5e6
 
 
 def test_library_against_catalog(records_dir):
@@ -321,7 +347,7 @@ def test_library_against_catalog(records_dir):
 # -- command line -------------------------------------------------------------------------
 
 
-def test_cli(records_dir, tmp_path, capsys):
+def test_cli(records_dir, shared_records, tmp_path, capsys):
     from urmx.cli import main
 
     assert main(["records", "--records", str(records_dir), "list", "--set", "paper"]) == 0
@@ -329,7 +355,7 @@ def test_cli(records_dir, tmp_path, capsys):
     assert main(["records", "--records", str(records_dir), "show", "elcentro"]) == 0
     out = capsys.readouterr().out
     assert "arias_intensity" in out and "0.3484 g" in out
-    assert main(["records", "show", str(records_dir / "formats/dmg/CE89146.V3")]) == 2
+    assert main(["records", "show", str(shared_records / "formats/dmg/CE89146.V3")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "CE89146.V3" in err and "Traceback" not in err
     png = tmp_path / "nahanni.png"
@@ -346,13 +372,13 @@ def test_plot_has_three_panels(records_dir):
     assert fig.axes[1].get_xlabel() == "frequency [Hz]"
 
 
-def test_read_copy_elsewhere_detects_format_from_content(records_dir, tmp_path):
+def test_read_copy_elsewhere_detects_format_from_content(shared_records, tmp_path):
     """The file name carries no hint: the content decides."""
     for src in ("formats/peer/RSN763_LOMAP_GIL067.AT2", "formats/geonet/"
                 "20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2", "formats/smc/0111a.smc"):
         dst = tmp_path / "record.bin"
-        shutil.copy(records_dir / src, dst)
-        assert R.detect_format(dst) == R.detect_format(records_dir / src)
+        shutil.copy(shared_records / src, dst)
+        assert R.detect_format(dst) == R.detect_format(shared_records / src)
         assert len(R.read(dst)) >= 1
 
 
@@ -380,16 +406,16 @@ def test_obspy_formats_and_columns(tmp_path):
 
 
 def test_relative_records_folder_is_made_absolute(tmp_path, monkeypatch):
-    """A relative $URMX_RECORDS (the README's `URMX_RECORDS=../shared/records`) means the
+    """A relative $URMX_RECORDS (`URMX_RECORDS=../my/records`) means the
     caller's working folder; records_dir returns it absolute, so that a worker or notebook
     kernel started in another folder reads the same one."""
     from urmx.config import records_dir
 
-    (tmp_path / "shared" / "records").mkdir(parents=True)
+    (tmp_path / "my" / "records").mkdir(parents=True)
     (tmp_path / "checkout").mkdir()
     monkeypatch.chdir(tmp_path / "checkout")
-    monkeypatch.setenv("URMX_RECORDS", "../shared/records")
+    monkeypatch.setenv("URMX_RECORDS", "../my/records")
     found = records_dir()
     assert found.is_absolute()
     monkeypatch.chdir(tmp_path)  # elsewhere, the returned path names the same folder
-    assert found.is_dir() and found.resolve() == (tmp_path / "shared" / "records").resolve()
+    assert found.is_dir() and found.resolve() == (tmp_path / "my" / "records").resolve()

@@ -9,9 +9,12 @@ checkout (an editable install), else the packaged copy. Outputs never go into th
 reports and archives default to the current folder.
 
 The records directory is, in order: the ``records_dir`` argument, the ``URMX_RECORDS``
-environment variable, or ``records_dir`` in ``urmx.toml`` in the current directory (a
+environment variable, ``records_dir`` in ``urmx.toml`` in the current directory (a
 ``urmx.toml`` that is not valid TOML, or whose records_dir is not a path, is an
-:class:`urmx.errors.InputError` naming it).
+:class:`urmx.errors.InputError` naming it), or else the records urmx ships
+(:func:`shipped_records`: the checkout's ``records/`` folder, or the copy a wheel carries).
+A folder the user names wins over the shipped one for the manifest records it holds
+(`urmx.records.manifest`); the others still come from the shipped folder.
 """
 
 from __future__ import annotations
@@ -77,7 +80,14 @@ def data_dir(name: str) -> Path:
     return packaged if isinstance(packaged, Path) else Path(str(packaged))
 
 
-def _config_records_dir(cfg: Path) -> tuple[Path | None, str]:
+def shipped_records() -> Path:
+    """The records urmx ships (``records/``: the files of the manifest's paper,
+    verification and FEMA P695 records, with ``manifest.toml`` and ``PROVENANCE.md``), as an
+    absolute path: the checkout's folder, or the copy a wheel carries."""
+    return data_dir("records").absolute()
+
+
+def _config_records_dir(cfg: Path) -> Path | None:
     """``records_dir`` of a ``urmx.toml`` (resolved against its folder), or None; a file
     that is not TOML, or a records_dir that is not a folder path, is an InputError naming
     the file."""
@@ -90,33 +100,35 @@ def _config_records_dir(cfg: Path) -> tuple[Path | None, str]:
         raise InputError(f"{cfg}: not valid TOML: {exc}") from None
     if "records_dir" not in data:
         close = [k for k in data if "record" in k.lower()]
-        hint = f" (it has {', '.join(map(repr, close))}: a misspelling?)" if close else ""
-        return None, f"; {cfg} has no records_dir{hint}"
+        if close:
+            raise InputError(f"{cfg} has no records_dir (it has {', '.join(map(repr, close))}: "
+                             "a misspelling?)")
+        return None
+
     value = data["records_dir"]
     if not isinstance(value, str) or not value.strip():
         raise InputError(f"{cfg}: records_dir = {value!r} must be a folder path in quotes, "
-                         'e.g. records_dir = "../shared/records"')
+                         'e.g. records_dir = "my/records"')
     path = Path(value).expanduser()
-    return (path if path.is_absolute() else cfg.parent / path), ""
+    return path if path.is_absolute() else cfg.parent / path
 
 
 def records_dir(records_dir: str | os.PathLike | None = None) -> Path:
-    """The folder the record manifest is resolved against, as an absolute path; a clear
-    error if unset or missing (or if ``urmx.toml`` is not valid)."""
+    """The folder the record manifest is resolved against, as an absolute path: the one
+    the user names (argument, ``$URMX_RECORDS``, ``urmx.toml``), else the shipped records
+    (:func:`shipped_records`); a clear error if a named folder is missing (or if
+    ``urmx.toml`` is not valid)."""
     source = "argument"
     value = records_dir
-    note = ""
     if value is None and os.environ.get(ENV):
         value, source = os.environ[ENV], f"${ENV}"
     if value is None:
         cfg = Path.cwd() / "urmx.toml"
         if cfg.exists():
-            value, note = _config_records_dir(cfg)
+            value = _config_records_dir(cfg)
             source = str(cfg)
     if value is None:
-        raise MissingFileError(
-            f"no records directory set: set {ENV}=/path/to/records (for example the "
-            f"shared/records folder beside this checkout) or pass --records DIR{note}")
+        return shipped_records()
     path = Path(value).expanduser()
     if not path.is_dir():
         raise MissingFileError(f"records directory {str(path)!r} (from {source}) does not exist")

@@ -203,14 +203,18 @@ def record_magnitude_distance(ds: xr.Dataset, records_dir=None) -> tuple[np.ndar
         return ds.magnitude.values.astype(float), ds.distance.values.astype(float)
     from . import records as rec
     from .config import records_dir as folder
+    from .config import shipped_records
 
     man = rec.manifest(records_dir)
     mag = np.array([float(man.get(r, {}).get("magnitude", np.nan)) for r in ids])
     rrup = {}
-    try:
-        lines = (folder(records_dir) / "library" / "catalog.tsv").read_text().splitlines()
-    except OSError:
-        lines = []
+    lines = []
+    for where in (folder(records_dir), shipped_records()):  # the user's, else the shipped
+        try:
+            lines = (where / "library" / "catalog.tsv").read_text().splitlines()
+            break
+        except OSError:
+            continue
     if lines:
         head = lines[0].split("\t")
         for line in lines[1:]:

@@ -1,4 +1,4 @@
-"""The wall model of ``shared/design/MODEL.md`` sections 1-6.
+"""The wall model of ``docs/MODEL.md`` sections 1-6.
 
 `Wall` is the immutable, validated description of one wall and its two supports.
 Everything the integrators need is packed into a flat float64 parameter vector
@@ -60,6 +60,15 @@ WALL_RANGES = {
     "bottom_stiffness": (1e2, 1e12, "N m-1"),
     "top_stiffness": (1e2, 1e12, "N m-1"),
 }
+#: largest plausible slenderness h/t of a one-way spanning URM wall: walls of the paper's
+#: parametric study reach 24, and masonry codes cap h/t of loadbearing walls near 25-30
+#: (e.g. AS 3700's slenderness limit of 27); above 40 a value is nearly always a
+#: thickness or height in another unit. Refused unless ``allow_unusual``.
+MAX_SLENDERNESS = 40.0
+#: highest plausible frequency of a flexible (timber) diaphragm [Hz]: the paper's timber
+#: diaphragms D1-D4 (Table IV) lie below 10 Hz; a stiffer support is a rigid one
+#: (``diaphragm_stiffness = "rigid"``). Refused unless ``allow_unusual``.
+MAX_DIAPHRAGM_FREQUENCY = 20.0
 # units a value out of range may have been given in: (name, factor to the SI unit)
 _OTHER_UNITS = {"m": (("millimetres", 1e-3), ("centimetres", 1e-2)),
                 "kg": (("grams", 1e-3), ("tonnes", 1e3)),
@@ -202,6 +211,13 @@ class Wall:
         if not isinstance(self.allow_unusual, bool):
             raise InputError(f"Wall allow_unusual={self.allow_unusual!r} must be true or false")
         problems = [p for p in (_range_problem(n, getattr(self, n)) for n in WALL_RANGES) if p]
+        slender = self.height / self.thickness
+        if slender > MAX_SLENDERNESS and not problems:
+            problems.append(f"Wall slenderness height/thickness = {self.height:g}/"
+                            f"{self.thickness:g} = {slender:.3g} lies above the plausible "
+                            f"{MAX_SLENDERNESS:g} of a URM wall (a thickness or height in "
+                            "another unit?): check them, or build the wall with "
+                            "allow_unusual=True (--allow-unusual) to run it on purpose")
         if problems:
             if not (self.allow_unusual or _ALLOW_UNUSUAL.get()):
                 raise InputError(problems[0])
@@ -353,6 +369,12 @@ class Wall:
         md = effective_diaphragm_mass(diaphragm_weight, plan_area)
         if diaphragm_frequency is not None:
             f = positive("diaphragm_frequency", diaphragm_frequency)
+            if f > MAX_DIAPHRAGM_FREQUENCY and not (allow_unusual or _ALLOW_UNUSUAL.get()):
+                raise InputError(
+                    f"Wall.in_building diaphragm_frequency={f:g} Hz lies above the "
+                    f"{MAX_DIAPHRAGM_FREQUENCY:g} Hz a flexible timber diaphragm can have: "
+                    'for a support that stiff use a rigid one (diaphragm_stiffness = "rigid"),'
+                    " or pass allow_unusual=True (--allow-unusual) to run it on purpose")
             k: float | str = (2.0 * math.pi * f) ** 2 * (md + 0.5 * mass)
         elif _is_rigid(diaphragm_stiffness):
             k = RIGID

@@ -28,7 +28,7 @@ from . import plot as P
 from .markdown import number as _fmt
 from .markdown import table
 from .paper import STUDIES
-from .reporting import open_archive, save_figure
+from .reporting import history_line, open_archive, save_figure
 from .variables import attrs as registry_attrs
 
 #: the paper's studies (`urmx.paper.STUDIES`) by the short name this report uses
@@ -239,9 +239,7 @@ def _preamble(rep: _Report, notes: list[str]) -> list[str]:
     rows = []
     for ds in rep.studies.values():
         dims = ", ".join(f"{d} {n}" for d, n in ds.sizes.items())
-        rows.append([study_kind(ds), dims,
-                     str(ds.attrs.get("history", "")).splitlines()[-1:][0]
-                     if ds.attrs.get("history") else ""])
+        rows.append([study_kind(ds), dims, history_line(ds)])
     lines += table(["study", "dimensions", "history (last line)"], rows) + [""]
     for label, kind in KINDS.items():
         if kind not in rep.studies:

@@ -5,12 +5,25 @@ shown in g and mm by `urmx.plot.display_scale`.)"""
 from __future__ import annotations
 
 import io
+import re
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from .errors import InputError, MissingFileError
+
+#: the time stamp an archive's ``history`` lines start with (``2026-11-23T15:34:59+00:00 ``)
+_STAMP = re.compile(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d(?:\.\d+)?(?:Z|[+-]\d\d:\d\d)?\s+")
+
+
+def history_line(ds: xr.Dataset) -> str:
+    """The last line of an archive's ``history`` without its time stamp (``urmx 0.1.0: urmx
+    paper``): what a committed report may show. The time of the run stays in the archive; a
+    report that printed it would change on every run though nothing else did, leaving a
+    checkout's ``git status`` unclean after ``urmx paper``."""
+    lines = str(ds.attrs.get("history", "")).strip().splitlines()
+    return _STAMP.sub("", lines[-1].strip()) if lines else ""
 
 
 def open_archive(archive, what: str = "study archive") -> xr.Dataset:

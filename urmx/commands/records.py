@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 UNITS = ("g", "m/s2", "cm/s2", "mm/s2")
 
 
 def _records_option(p, default) -> None:
     p.add_argument("--records", metavar="DIR", default=default,
-                   help="records directory (default $URMX_RECORDS)")
+                   help="records directory: yours wins for the records it holds (default "
+                        "$URMX_RECORDS or urmx.toml, else the records urmx ships)")
 
 
 def file_options(s, what: str = "a record file") -> None:
@@ -19,10 +21,17 @@ def file_options(s, what: str = "a record file") -> None:
     s.add_argument("--unit", choices=UNITS, help=f"unit of {what} that does not state it")
     s.add_argument("--channel", metavar="NAME",
                    help="channel of a multi-channel file (GeoNet, CDMG, ...): required there")
+    s.add_argument("--format", metavar="FORMAT",
+                   help="what the file is, when its first bytes do not say: peer, geonet, "
+                        "cosmos, dmg, smc, knet, columns, or an ObsPy format (MSEED, SAC, ...)")
+    s.add_argument("--response", metavar="FILE.xml",
+                   help="StationXML whose instrument response turns the counts of a MiniSEED "
+                        "(or other ObsPy-format) file into acceleration")
     s.add_argument("--allow-unusual", action="store_true",
-                   help="read a record whose time step is outside 0.0001-0.1 s or whose PGA "
-                        "is outside 0.001-10 g (refused otherwise: nearly always a unit "
-                        "mistake)")
+                   help="read a record whose time step is outside 0.0001-0.1 s, whose PGA "
+                        "is outside 0.001-10 g, whose PGV or PGD is beyond strong motion, "
+                        "or whose header says it is no acceleration (refused otherwise: "
+                        "nearly always a mistake; the override is recorded)")
 
 
 def record_inputs(name: str, records_dir=None) -> list[tuple[str, object]]:
@@ -96,8 +105,9 @@ def _trace(args):
 
     path = Path(args.id)
     if path.is_file():
-        return read_channel(path, dt=args.dt, unit=args.unit, channel=args.channel,
-                            allow_unusual=args.allow_unusual).trace()
+        return read_channel(path, args.format, dt=args.dt, unit=args.unit,
+                            channel=args.channel, allow_unusual=args.allow_unusual,
+                            response=args.response).trace()
     try:
         known = manifest(args.records)
     except MissingFileError:
@@ -108,9 +118,10 @@ def _trace(args):
         if path.exists():
             raise InputError(f"{args.id!r} is a folder, not a record file")
         return load(args.id, args.records)  # unknown ids: the manifest's "did you mean"
-    if args.dt is not None or args.unit is not None or args.allow_unusual:
-        raise InputError(f"--dt, --unit and --allow-unusual apply to record files; "
-                         f"{args.id!r} is a manifest record that states its own")
+    if args.dt is not None or args.unit is not None or args.allow_unusual or \
+            args.format is not None or args.response is not None:
+        raise InputError(f"--dt, --unit, --format, --response and --allow-unusual apply to "
+                         f"record files; {args.id!r} is a manifest record that states its own")
     return load(args.id, args.records, channel=args.channel)
 
 
@@ -149,6 +160,23 @@ def _index(args) -> int:
     return 0
 
 
+def _from(entry: dict) -> str:
+    """Where a listed record's file is read from: ``shipped`` (the records urmx ships) or
+    ``yours`` (the folder the user named)."""
+    from urmx.config import shipped_records
+
+    return "shipped" if Path(entry["folder"]) == shipped_records() else "yours"
+
+
+def _folders(rows: list[dict]) -> None:
+    """The folders the listed records come from, one line each with how many."""
+    for tag in ("yours", "shipped"):
+        held = [e for e in rows if _from(e) == tag]
+        if held:
+            what = "your records folder" if tag == "yours" else "shipped with urmx"
+            print(f"{tag}: {len(held)} records from {held[0]['folder']} ({what})")
+
+
 def _run(args) -> int:
     if args.action == "list":
         from urmx.errors import InputError
@@ -161,10 +189,11 @@ def _run(args) -> int:
                              f"{', '.join(sets)})")
         rows = [e for e in entries.values() if not args.set or e["set"] == args.set]
         w = max([22] + [len(e["id"]) for e in rows])
-        print(f"{'id':{w}s} {'set':20s} {'PGA g':>6s} {'scale':>7s}  event / station / "
-              "component")
+        _folders(rows)
+        print(f"{'id':{w}s} {'from':7s} {'set':20s} {'PGA g':>6s} {'scale':>7s}  event / "
+              "station / component")
         for e in rows:
-            print(f"{e['id']:{w}s} {e['set']:20s} {e['expected_pga_g']:6.3f} "
+            print(f"{e['id']:{w}s} {_from(e):7s} {e['set']:20s} {e['expected_pga_g']:6.3f} "
                   f"{e['scale_factor']:7.4g}  {e['event']} {e.get('date', '')} / "
                   f"{e.get('station', '')} / {e.get('component', '')}"
                   + ("  [substitute]" if e.get("substitute") else ""))

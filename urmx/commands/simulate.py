@@ -44,8 +44,9 @@ def _record(args):
 
     path = Path(args.record)
     if path.is_file():
-        return read_channel(path, dt=args.dt, unit=args.unit, channel=args.channel,
-                            allow_unusual=args.allow_unusual)
+        return read_channel(path, args.format, dt=args.dt, unit=args.unit,
+                            channel=args.channel, allow_unusual=args.allow_unusual,
+                            response=args.response)
     try:
         ids = manifest(args.records)
     except MissingFileError:
@@ -55,9 +56,10 @@ def _record(args):
     if args.record not in ids:
         raise MissingFileError(f"record {args.record!r} is neither a file nor a manifest "
                                "record id")
-    if args.dt is not None or args.unit is not None:
-        raise InputError(f"--dt and --unit apply to record files; {args.record!r} is a "
-                         "manifest record that states its own")
+    if args.dt is not None or args.unit is not None or args.format is not None or \
+            args.response is not None:
+        raise InputError(f"--dt, --unit, --format and --response apply to record files; "
+                         f"{args.record!r} is a manifest record that states its own")
     return load_samples(args.record, args.records, channel=args.channel)
 
 

@@ -1,11 +1,13 @@
 """The record manifest (``records/manifest.toml``, plus a records folder's own
 ``manifest.toml``) and loading records by id; :func:`index` writes a manifest of a folder.
 
-The manifest lives in the repository; the data files do not. ``file`` entries are
-resolved against the records directory (:func:`urmx.config.records_dir`), the file's
+The manifest and the record files it names live in the repository's ``records/`` folder
+(a wheel carries a copy: `urmx.config.shipped_records`). A folder the user names
+(``URMX_RECORDS``, ``urmx.toml`` or ``--records``) wins for the records it holds: an entry
+whose ``file`` is in it is read from there, the others from the shipped folder. The file's
 SHA-256 is checked, and the record is read with the manifest's format, dt and unit. A
 records directory that holds a ``manifest.toml`` of its own (what ``urmx records index``
-writes) adds its records to the checkout's: ``URMX_RECORDS=my/suite`` makes them
+writes) adds its records to the shipped ones: ``URMX_RECORDS=my/suite`` makes them
 loadable by id.
 """
 
@@ -19,7 +21,7 @@ import re
 import sys
 from pathlib import Path
 
-from ..config import data_dir
+from ..config import data_dir, shipped_records
 from ..config import records_dir as _records_dir
 from ..errors import InputError, MissingFileError, writing
 from .errors import ChecksumError, ManifestError, UnknownFormatError, UnsupportedRecordError
@@ -56,7 +58,52 @@ def _read_manifest(src: Path) -> list[dict]:
         if missing:
             raise ManifestError(src, f"record #{k + 1} ({entry.get('id', '?')}) lacks "
                                 f"{', '.join(missing)}")
+        _validate(src, k, entry)
     return records
+
+
+#: what each number of a manifest entry must be: key -> (test, what it must be)
+_NUMBERS = {
+    "scale_factor": (lambda v: v > 0, "a positive number (the factor the record is "
+                     "analysed at)"),
+    "paper_scale_factor": (lambda v: v > 0, "a positive number"),
+    "dt": (lambda v: v > 0, "a positive time step in seconds"),
+    "expected_pga_g": (lambda v: v >= 0, "a peak acceleration in g, >= 0"),
+    "paper_pga_g": (lambda v: v >= 0, "a peak acceleration in g, >= 0"),
+    "target_scaled_pga_g": (lambda v: v >= 0, "a peak acceleration in g, >= 0"),
+    "npts": (lambda v: v >= 2 and float(v).is_integer(), "a whole number of points >= 2"),
+}
+_STRINGS = ("id", "set", "file", "format", "unit", "sha256", "source", "event", "channel")
+
+
+def _validate(src: Path, k: int, entry: dict) -> None:
+    """Every value of a manifest entry checked where it is read: a one-line
+    `ManifestError` naming the file, the record and the key (a scale factor of 0, -0.5 or
+    nan is never used)."""
+    from .readers import UNIT_FACTORS
+
+    rid = entry.get("id", "?")
+
+    def bad(key, what):
+        return ManifestError(src, f"record #{k + 1} ({rid!r}): {key} = {entry[key]!r} must "
+                             f"be {what}")
+
+    for key in _STRINGS:
+        if key in entry and (not isinstance(entry[key], str) or not entry[key].strip()):
+            raise bad(key, "a non-empty string in quotes")
+    for key, (ok, what) in _NUMBERS.items():
+        if key not in entry:
+            continue
+        v = entry[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or not ok(v):
+            raise bad(key, what)
+    if entry["unit"] not in UNIT_FACTORS and entry["unit"] not in ("g/10", "um/s2"):
+        raise bad("unit", f"one of {', '.join(UNIT_FACTORS)}")
+    if not re.fullmatch(r"[0-9a-f]{64}", entry["sha256"]):
+        raise bad("sha256", "the 64 hexadecimal digits of the file's SHA-256")
+    if "allow_unusual" in entry and not isinstance(entry["allow_unusual"], bool):
+        raise bad("allow_unusual", "true or false")
 
 
 def manifest(records_dir: str | os.PathLike | None = None,
@@ -66,12 +113,16 @@ def manifest(records_dir: str | os.PathLike | None = None,
     Parameters
     ----------
     records_dir : str or path-like, optional
-        Records directory used to add each entry's absolute ``path``; if omitted the
-        configured one is used when set (``URMX_RECORDS``, ``urmx.toml``), otherwise
-        entries carry no ``path``. A ``manifest.toml`` in it adds its records.
+        A records folder of the user's (default: the configured one, ``URMX_RECORDS`` or
+        ``urmx.toml``, if any). It wins over the records urmx ships
+        (`urmx.config.shipped_records`) for the records it holds: an entry of
+        ``records/manifest.toml`` whose ``file`` is in it is read from it, the others from
+        the shipped folder; a ``manifest.toml`` in it adds its records (and replaces a
+        shipped record of the same id).
     path : str or path-like, optional
-        Another manifest file, read alone (default: ``records/manifest.toml`` and the
-        records directory's ``manifest.toml``).
+        Another manifest file, read alone, its ``file`` entries relative to the records
+        folder (default: ``records/manifest.toml`` and the records folder's
+        ``manifest.toml``).
 
     Returns
     -------
@@ -79,36 +130,42 @@ def manifest(records_dir: str | os.PathLike | None = None,
         Record id -> entry with every manifest field (id, set, event, date, magnitude,
         station, component, site, source, file, format, dt [s], unit, sha256,
         expected_pga_g [g], paper_scale_factor, scale_factor, notes, ...), in file order;
-        ``manifest`` names the file the entry comes from.
+        ``manifest`` names the file the entry comes from, ``folder`` the records folder
+        its file is read from and ``path`` the file itself.
 
     Raises
     ------
     ManifestError
-        A manifest that is not valid TOML, an entry without a required field, or an id
-        that appears twice (in one file or in both).
+        A manifest that is not valid TOML, an entry without a required field, a value
+        that is not what its key needs (a scale factor that is not a positive finite
+        number, ...: the message names the file, the record and the key), or an id that
+        appears twice in one file.
     """
-    base = None
+    shipped = shipped_records()
     try:
         base = _records_dir(records_dir)
     except FileNotFoundError:
         if records_dir is not None:
             raise
-    sources = [Path(path)] if path is not None else [MANIFEST]
-    if path is None and base is not None:
-        own = base / FOLDER_MANIFEST
-        if own.is_file() and not (MANIFEST.is_file() and own.samefile(MANIFEST)):
-            sources.append(own)
+        base = shipped
+    own_folder = base != shipped
     out: dict[str, dict] = {}
-    for src in sources:
+    if path is not None:
+        sources = [(Path(path), base, False)]
+    else:
+        sources = [(MANIFEST, shipped, own_folder)]
+        own = base / FOLDER_MANIFEST
+        if own_folder and own.is_file() and not (MANIFEST.is_file() and own.samefile(MANIFEST)):
+            sources.append((own, base, False))
+    for src, folder, prefer_base in sources:
+        seen: set[str] = set()
         for entry in _read_manifest(src):
-            if entry["id"] in out:
-                other = out[entry["id"]]["manifest"]
-                where = "twice" if other == str(src) else f"also in {other}"
-                raise ManifestError(src, f"record id {entry['id']!r} appears {where}")
-            entry = dict(entry, manifest=str(src))
-            if base is not None:
-                entry["path"] = str(base / entry["file"])
-            out[entry["id"]] = entry
+            if entry["id"] in seen:
+                raise ManifestError(src, f"record id {entry['id']!r} appears twice")
+            seen.add(entry["id"])
+            where = base if prefer_base and (base / entry["file"]).is_file() else folder
+            out[entry["id"]] = dict(entry, manifest=str(src), folder=str(where),
+                                    path=str(where / entry["file"]))
     return out
 
 
@@ -181,16 +238,14 @@ def load_samples(record_id: str, records_dir: str | os.PathLike | None = None, *
     (``data`` in m s-2, ``dt``, ``record`` with the manifest entry's id, set, scale_factor,
     paper_scale_factor and sha256). Same arguments, checks and errors as :func:`load`; the
     file is read once."""
-    from ..errors import InputError
     from .errors import RecordError
     from .readers import read_file, same_channel, stated_by_format
 
     if not isinstance(record_id, str):
         raise InputError(f"load: record_id must be a manifest record id (str), got "
                          f"{record_id!r} ({type(record_id).__name__})")
-    base = _records_dir(records_dir)
-    e = entry(record_id, base, manifest)
-    path = base / e["file"]
+    e = entry(record_id, records_dir, manifest)
+    path = Path(e["path"])
     if not path.is_file():
         raise MissingFileError(f"record {record_id!r}: file {str(path)!r} is missing; it comes "
                                f"from {e['source']}")

@@ -137,7 +137,8 @@ class _Channel:
 
 
 def read(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
-         unit: str | None = None, *, channel: str | None = None, allow_unusual: bool = False):
+         unit: str | None = None, *, channel: str | None = None, allow_unusual: bool = False,
+         response: str | os.PathLike | None = None):
     """Read an accelerogram file into an :class:`obspy.Stream` in m s-2.
 
     Parameters
@@ -161,8 +162,17 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
         ignored). Without it every channel is returned.
     allow_unusual : bool
         Read a record whose time step lies outside `DT_RANGE`, whose PGA lies outside
-        `PGA_RANGE_G` or whose file is larger than `MAX_RECORD_BYTES`; such values are
-        refused otherwise, as they are nearly always unit mistakes.
+        `PGA_RANGE_G` or whose file is larger than `MAX_RECORD_BYTES`, or that fails a
+        check of `urmx.records.checks` (a header stating velocity, displacement or volts,
+        a seismometer's channel, an instrument calibration or counts, a PGV or PGD beyond
+        strong motion, a stated unit the values disagree with); such records are refused
+        otherwise, as they are nearly always mistakes. What was overridden is written to
+        ``stats.processing`` (``urmx: allow_unusual overrode: ...``).
+    response : str or path-like, optional
+        A StationXML file whose instrument response is removed (ObsPy
+        ``remove_response(output="ACC")``) from the traces of a file in one of ObsPy's
+        formats, turning a digitiser's counts into m s-2; without it integer samples are
+        refused as counts.
 
     Returns
     -------
@@ -186,8 +196,8 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     """
     from obspy import Stream
 
-    return Stream([c.trace() for c in read_samples(path, format, dt, unit, channel=channel,
-                                                   allow_unusual=allow_unusual)])
+    return Stream([c.trace() for c in read_file(path, format, dt, unit, channel,
+                                                allow_unusual, response=response).samples])
 
 
 def read_samples(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
@@ -204,14 +214,16 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
 
 def read_channel(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
                  unit: str | None = None, *, channel: str | None = None,
-                 allow_unusual: bool = False) -> Samples:
+                 allow_unusual: bool = False,
+                 response: str | os.PathLike | None = None) -> Samples:
     """One channel of a record file as :class:`Samples`: `channel`, or the file's only
     one; a multi-channel file without `channel` is a :class:`ChannelError` listing its
     channels (never a silent first channel). Otherwise as :func:`read_samples`."""
     from ..errors import path_argument
 
     path_argument("read_channel", "path", path)
-    return read_file(path, format, dt, unit, channel, allow_unusual, one=True).samples[0]
+    return read_file(path, format, dt, unit, channel, allow_unusual, one=True,
+                     response=response).samples[0]
 
 
 @dataclass(frozen=True)
@@ -286,7 +298,8 @@ class RecordFile:
 
 def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float | None = None,
              unit: str | None = None, format: str | None = None,
-             allow_unusual: bool = False) -> RecordFile:
+             allow_unusual: bool = False,
+             response: str | os.PathLike | None = None) -> RecordFile:
     """One channel of a record file with its provenance, reading the file once.
 
     Parameters
@@ -318,7 +331,7 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
 
     path_argument("describe", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, channel, allow_unusual,
-                                     one=True))[0]
+                                     one=True, response=response))[0]
 
 
 def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str | None = None,
@@ -401,10 +414,13 @@ class FileRead(NamedTuple):
 
 def read_file(path: str | os.PathLike, format: str | None = None, dt: float | None = None,
               unit: str | None = None, channel: str | None = None,
-              allow_unusual: bool = False, one: bool = False) -> FileRead:
+              allow_unusual: bool = False, one: bool = False,
+              response: str | os.PathLike | None = None) -> FileRead:
     """Read a record file once: its checked channels, the SHA-256 of its bytes and the
     names of all its channels. Arguments and errors as :func:`read`; with ``one=True`` a
-    multi-channel file without `channel` is a :class:`ChannelError` listing them."""
+    multi-channel file without `channel` is a :class:`ChannelError` listing them;
+    `response`: a StationXML file whose instrument response is removed from the traces of
+    a file in one of ObsPy's formats (counts to m s-2)."""
     path = Path(path)
     if not path.is_file():
         raise MissingFileError(f"record file {str(path)!r} does not exist")
@@ -430,11 +446,14 @@ def read_file(path: str | os.PathLike, format: str | None = None, dt: float | No
     try:
         if fmt == "knet":
             channels = _parse_knet(path, raw)
+        elif fmt == "columns":
+            encoding = _text_encoding(raw[:SNIFF_BYTES]) or "latin-1"
+            channels = _parse_columns(path, raw, encoding)
         elif fmt in _PARSERS:
             encoding = _text_encoding(raw[:SNIFF_BYTES]) or "latin-1"
             channels = _PARSERS[fmt](path, _decode(raw, encoding).splitlines())
         else:
-            channels = _parse_obspy(path, obspy_format, raw)
+            channels = _parse_obspy(path, obspy_format, raw, response)
             fmt = obspy_format
     except RecordError:
         raise
@@ -548,6 +567,8 @@ def _text_format(path: Path, lines: list[str]) -> str | None:
     if re.search(r"(UN)?CORRECTED ACCELEROGRAM", "\n".join(lines[:2]), re.I):
         return "dmg"
     body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
+    if body and _header_names(body[0]) is not None and len(body) > 1:
+        body = body[1:]  # a header row of column names (time, acc_g, ...)
     if body and all(_is_numeric_line(ln) for ln in body):
         return "columns"
     return None
@@ -732,7 +753,7 @@ _PEER_LINE4_WEST2 = re.compile(r"^\s*(?P<npts>\S+)\s+(?P<dt>\S+)\s+NPTS\s*,\s*DT
 
 
 def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
-    if len(lines) < 5:
+    if len(lines) < 4:
         raise TruncatedRecordError(path, "PEER AT2 file ends inside its 4-line header")
     m = _PEER_LINE4.search(lines[3]) or _PEER_LINE4_WEST2.search(lines[3])
     if not m:
@@ -742,8 +763,11 @@ def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     if not npts_tok.isdigit():
         raise RecordError(path, f"PEER AT2 line 4: NPTS={npts_tok!r} is not a whole number: "
                           f"{lines[3].strip()!r}")
+    if int(npts_tok) < 2:
+        raise PointCountError(path, f"PEER AT2 line 4 states NPTS= {int(npts_tok)}: a record "
+                              f"has at least 2 samples ({lines[3].strip()!r})")
     dt = _number(dt_tok)
-    if dt is None:
+    if dt is None:  # a number that is not a positive time step is said by _checked
         raise RecordError(path, f"PEER AT2 line 4: time step DT={_not_a_number(dt_tok)}: "
                           f"{lines[3].strip()!r}")
     if re.search(r"VELOCITY|DISPLACEMENT", lines[2], re.I):
@@ -752,13 +776,33 @@ def _parse_peer(path: Path, lines: list[str]) -> list[_Channel]:
     unit_m = re.search(r"UNITS OF\s+(\S+)", lines[2], re.I)
     unit = _unit_name(unit_m.group(1)) if unit_m else None
     if unit is None:
-        raise RecordUnitError(path, f"PEER AT2 header states an unknown unit: {lines[2]!r}")
+        quantity = _quantity_of(unit_m.group(1)) if unit_m else None
+        raise (UnusualRecordError if quantity else RecordUnitError)(
+            path, "PEER AT2 line 3 states " + (f"a unit of {quantity}, not acceleration: "
+                                               if quantity else "an unknown unit: ")
+            + repr(lines[2].strip()))
+    if len(lines) < 5:
+        raise TruncatedRecordError(path, f"PEER AT2 file ends after its 4-line header: no "
+                                   f"samples, though line 4 states NPTS= {int(npts_tok)}")
     values = _values(path, lines[4:], 5, "PEER AT2")
     parts = [p.strip() for p in lines[1].split(",")]
     return [_Channel(values, unit, dt, npts_header=int(npts_tok),
                      station=parts[2] if len(parts) > 2 else "",
                      channel=_component(parts[-1]) if len(parts) > 1 else "",
                      note=lines[1].strip())]
+
+
+def _quantity_of(unit_text: str) -> str | None:
+    """The quantity a unit that is not an acceleration names (``CM/S``: velocity, ``CM``:
+    displacement, ``COUNTS``), or None."""
+    t = unit_text.strip().strip("()[],.;:").lower().replace(" ", "").replace("sec", "s")
+    if re.fullmatch(r"(m|cm|mm|um|nm|in|ft)/s", t):
+        return "velocity"
+    if re.fullmatch(r"(m|cm|mm|um|nm|in|ft)", t):
+        return "displacement"
+    if t in ("counts", "count", "digits"):
+        return "counts"
+    return None
 
 
 def _parse_geonet(path: Path, lines: list[str]) -> list[_Channel]:
@@ -818,7 +862,12 @@ def _parse_cosmos(path: Path, lines: list[str]) -> list[_Channel]:
     i += 1 + n_comment
     head = lines[i]
     npts = int(_find(r"^\s*(\d+)", head)[0])
-    unit = _unit_name(_find(r"units\s*=\s*([^(,]+)", head)[0])
+    stated = _find(r"units\s*=\s*([^(,]+)", head)[0]
+    unit = _unit_name(stated)
+    if unit is None and _quantity_of(stated):
+        raise UnusualRecordError(path, f"COSMOS data header states units={stated.strip()} "
+                                 f"({_quantity_of(stated)}), not an acceleration: read the "
+                                 ".acc file of the record")
     per_line, width = map(int, _find(r"Format\s*=\s*\((\d+)[EF](\d+)", head))
     data = lines[i + 1:i + 1 + math.ceil(npts / per_line)]
     values = _fixed(path, data, width, first=i + 2)
@@ -1038,34 +1087,191 @@ def _comment_unit(path: Path, lineno: int, comment: str) -> tuple[str, str] | No
     return None
 
 
-def _parse_columns(path: Path, lines: list[str]) -> list[_Channel]:
-    comments, body, body_lines = [], [], []
-    for i, ln in enumerate(lines, 1):
-        s = ln.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            comments.append((i, s))
-        else:
-            body.append(s)
-            body_lines.append(i)
-    if body and all(_DECIMAL_COMMA.fullmatch(s) for s in body[:50]):
-        raise RecordError(path, f"line {body_lines[0]}: {_not_a_number(body[0])}")
-    rows = [s.replace(",", " ").split() for s in body]
-    try:
-        values = np.array([v for r in rows for v in r], dtype=float)
-    except ValueError:
-        for i, s, r in zip(body_lines, body, rows, strict=True):
-            bad = next((t for t in r if not _safe_float(t)), None)
-            if bad is not None:
-                raise RecordError(path, f"line {i} is not numbers: {s[:80]!r} "
-                                  f"({_not_a_number(bad)})") from None
-        raise
+# -- plain number columns ---------------------------------------------------------------
+# One acceleration per line (SLAMMER), several values per line, a (time, acceleration) pair
+# per line, or an ordinary CSV file with one header row of names. The file is parsed in
+# blocks of about a megabyte of text, so reading N samples holds the file's bytes, the
+# samples (8N bytes) and, per line, its count of values and its number (6 bytes), never a
+# Python object per value (README "Errors", rule 7). A header row names the columns: a
+# time column (time, t; [s], (s), _s or _ms) and acceleration columns (acc, accel,
+# acceleration, a; a unit in brackets or after an underscore: acc_g, acc [m/s2]); a
+# column of another name is asked about, never guessed; several acceleration columns are
+# one channel each (named by the header). Comments may state dt, a sampling rate (read as
+# its step), the unit and the point count.
+
+#: bytes of text parsed at a time
+_BLOCK = 1 << 18
+
+_TIME_NAME = re.compile(r"^(?:time|t)(?:[ _]*[\[(]?\s*(?P<u>s|sec|ms)\s*[\])]?)?$", re.I)
+_ACC_NAME = re.compile(r"^(?:ground[ _]?acc(?:eleration)?|acceleration|accel|acc|ag|a)"
+                       r"(?P<rest>.*)$", re.I)
+_RATE_STATEMENT = re.compile(
+    r"\b(?:sampling rate|sample rate|sampling frequency|samples per second|sps)\b"
+    r"\s*(?P<sep>=|:|\bis\b|\bof\b)?\s*(?P<value>[^\s;]*)\s*(?P<unit>\w*)", re.I)
+
+
+def _blocks(raw: bytes, encoding: str):
+    """(number of the first line, lines) of the decoded text, a block at a time; blocks
+    end at a line break, so line numbers are those of the whole text."""
+    if encoding.startswith("utf-16"):  # rare: decode at once
+        yield 1, _decode(raw, encoding).splitlines()
+        return
+    start, lineno = 0, 1
+    if encoding == "utf-8-sig":
+        start = 3
+        encoding = "latin-1"
+    n = len(raw)
+    while start < n:
+        end = raw.find(b"\n", min(start + _BLOCK, n))
+        end = n if end < 0 else end + 1
+        lines = raw[start:end].decode(encoding).splitlines()
+        yield lineno, lines
+        lineno += len(lines)
+        start = end
+
+
+def _header_names(line: str) -> list[str] | None:
+    """The column names of a header row (comma-, semicolon- or tab-separated, or separated
+    by spaces when no name holds one), or None when `line` is not a row of names."""
+    s = line.strip()
+    if not s or _is_numeric_line(s) or not re.match(r"[A-Za-z\"']", s):
+        return None
+    sep = "," if "," in s else ";" if ";" in s else "\t" if "\t" in s else None
+    names = [n.strip().strip("\"'").strip() for n in (s.split(sep) if sep else s.split())]
+    if not names or any(not n or not re.match(r"[A-Za-z]", n) for n in names):
+        return None
+    return names
+
+
+def _column_kind(name: str) -> tuple[str, str | None] | None:
+    """("time", unit) or ("acc", unit) of a column name, or None when the name says
+    neither; a unit the name holds is returned as urmx names it (None: none)."""
+    m = _TIME_NAME.match(name.strip())
+    if m:
+        return "time", (m.group("u") or "s").lower().replace("sec", "s")
+    m = _ACC_NAME.match(name.strip())
+    if not m:
+        return None
+    rest = m.group("rest").strip()
+    if not rest:
+        return "acc", None
+    inner = re.fullmatch(r"[\[(]\s*(.+?)\s*[\])]", rest) or re.fullmatch(r"[_ ]+(.+)", rest)
+    if inner:
+        unit = _unit_name(inner.group(1))
+        if unit is not None:
+            return "acc", unit
+        # acc_x, acc_ns_g: a component label, perhaps followed by a unit
+        tail = re.fullmatch(r"(?:[A-Za-z0-9]+[_ ]+)?[\[(]?\s*(.+?)\s*[\])]?", inner.group(1))
+        unit = _unit_name(tail.group(1)) if tail else None
+        if unit is not None or re.fullmatch(r"[A-Za-z0-9]+", inner.group(1)):
+            return "acc", unit
+    return None
+
+
+def _comment_rate(path: Path, lineno: int, comment: str) -> tuple[float, str] | None:
+    """The time step [s] a comment stating a sampling rate gives (``# sampling rate = 100
+    Hz`` -> 0.01 s), with where it was said, or None; a rate that is not a positive number
+    is refused with the file, the line and the comment."""
+    m = _RATE_STATEMENT.search(comment)
+    if not m or (not m.group("value") and not m.group("sep")):
+        return None
+    value = m.group("value").rstrip(",;)")
+    glued = re.fullmatch(r"([-+.\d][\d.eE+-]*)(hz|sps)", value, re.I)
+    if glued:
+        value = glued.group(1)
+    rate = _number(value)
+    if rate is None or not np.isfinite(rate) or rate <= 0:
+        raise MissingTimeStepError(path, f"comment line {lineno} {comment!r} states a sampling "
+                                   f"rate that is not a positive number ({value!r}); correct "
+                                   "the comment, or remove it and pass dt= (--dt)")
+    return 1.0 / rate, f"comment line {lineno}: {comment!r}"
+
+
+def _parse_columns(path: Path, raw: bytes, encoding: str) -> list[_Channel]:
+    """Plain number columns, a block of text at a time (section comment above)."""
+    comments, names, head_line = [], None, None
+    vals, widths, linenos, first = [], [], [], True
+    for lineno, lines in _blocks(raw, encoding):
+        if first:
+            _decimal_commas(path, lines, lineno)
+            first = False
+        toks, w, nos = [], [], []
+        for i, ln in enumerate(lines, lineno):
+            s = ln.strip()
+            if not s:
+                continue
+            if s[0] == "#":
+                comments.append((i, s))
+                continue
+            if names is None and not w and not widths:
+                names = _header_names(s)
+                if names is not None:
+                    head_line = i
+                    continue
+            r = s.replace(",", " ").replace(";", " ").split()
+            toks += r
+            w.append(len(r))
+            nos.append(i)
+        if toks:
+            vals.append(_block_values(path, toks, w, nos))
+            widths.append(np.array(w, dtype=np.int16))
+            linenos.append(np.array(nos, dtype=np.int32))
+    values = np.concatenate(vals) if len(vals) != 1 else vals[0]
+    del vals
+    w = np.concatenate(widths) if widths else np.empty(0, dtype=np.int16)
+    nos = np.concatenate(linenos) if linenos else np.empty(0, dtype=np.int32)
     if values.size == 1:
-        raise TruncatedRecordError(path, f"the file holds a single number ({body[0]}), not an "
-                                   "acceleration history: is it the right file?")
+        raise TruncatedRecordError(path, f"the file holds a single number ({values[0]:g}), not "
+                                   "an acceleration history: is it the right file?")
     ch = _Channel(values, None, None, unit_from_file=False, note="plain numbers")
-    dts = [d for d in (_comment_dt(path, i, c) for i, c in comments) if d]
+    _column_comments(path, ch, comments)
+    if names is not None:
+        return _headed(path, ch, names, head_line, w, nos)
+    if w.size > 2 and bool((w == 2).all()) and _time_like(np.diff(values[0::2])):
+        _time_column(path, ch, values[0::2], values[1::2], nos)
+        ch.note = "plain numbers, (time, acceleration) columns"
+    elif w.size > 2 and w.min() == w.max() >= 3 and \
+            bool(np.all(np.diff(values[0::int(w[0])]) > 0)):
+        k = int(w[0])
+        raise RecordError(path, f"every line holds {k} numbers and the first column increases "
+                          f"like a time: the columns are ambiguous (a time and {k - 1} "
+                          "accelerations?), and urmx never guesses between acceleration "
+                          "columns; give the file a header row naming them (e.g. time,acc_x_g,"
+                          "acc_y_g) and choose one with channel= (--channel), or keep one "
+                          "acceleration column")
+    return [ch]
+
+
+def _decimal_commas(path: Path, lines: list[str], lineno: int) -> None:
+    """Refuse numbers written with a decimal comma (``0,005``), which a comma-separated
+    reading would split in two: all of the first 50 data lines look like one."""
+    body = [(i, s.strip()) for i, s in enumerate(lines, lineno)
+            if s.strip() and not s.strip().startswith("#")][:50]
+    if body and _header_names(body[0][1]) is not None:
+        body = body[1:]
+    if body and all(_DECIMAL_COMMA.fullmatch(s) for _, s in body):
+        raise RecordError(path, f"line {body[0][0]}: {_not_a_number(body[0][1])}")
+
+
+def _block_values(path: Path, toks: list[str], w: list[int], nos: list[int]) -> np.ndarray:
+    """The numbers of a block's tokens; a token that is not one is named with its line."""
+    try:
+        return np.array(toks, dtype=float)
+    except ValueError:
+        k = 0
+        for n, i in zip(w, nos, strict=True):
+            bad = next((tk for tk in toks[k:k + n] if not _safe_float(tk)), None)
+            if bad is not None:
+                raise RecordError(path, f"line {i} is not numbers: {' '.join(toks[k:k + n])[:80]!r}"
+                                  f" ({_not_a_number(bad)})") from None
+            k += n
+        raise
+
+
+def _column_comments(path: Path, ch: _Channel, comments: list[tuple[int, str]]) -> None:
+    """The time step (or sampling rate), unit and point count the comment lines state."""
+    dts = [d for i, c in comments for d in (_comment_dt(path, i, c), _comment_rate(path, i, c))
+           if d]
     units = [u for u in (_comment_unit(path, i, c) for i, c in comments) if u]
     for found, what in ((dts, "time steps"), (units, "units")):
         if len({f[0] for f in found}) > 1:
@@ -1079,22 +1285,67 @@ def _parse_columns(path: Path, lines: list[str]) -> list[_Channel]:
     n_head = _find(r"(\d+)\s+points", "\n".join(c for _, c in comments))
     if n_head:
         ch.extra["npts_comment"] = int(n_head[0])
-    if len(rows) > 2 and all(len(r) == 2 for r in rows):
-        t, a = values[0::2], values[1::2]
-        steps = np.diff(t)
-        if _time_like(steps):  # two columns: time [s], accel (not values in pairs)
-            if not np.isfinite(t).all():
-                k = int(np.argmax(~np.isfinite(t)))
-                raise NonFiniteError(path, f"line {body_lines[k]}: time {t[k]} is not finite")
-            if np.any(steps <= 0):
-                k = int(np.argmax(steps <= 0))
-                raise RecordError(
-                    path, f"line {body_lines[k + 1]}: time {t[k + 1]:g} s does not increase "
-                    f"(line {body_lines[k]} has {t[k]:g} s); the first column of a (time, "
-                    "acceleration) file must increase strictly")
-            ch.times, ch.values = t, a
-            ch.note = "plain numbers, (time, acceleration) columns"
-    return [ch]
+
+
+def _time_column(path: Path, ch: _Channel, t: np.ndarray, a: np.ndarray,
+                 nos: np.ndarray) -> None:
+    """Make `t` [s] the channel's sample times and `a` its values; the times must be
+    finite and increase strictly (the first bad one is named with its line)."""
+    if not np.isfinite(t).all():
+        k = int(np.argmax(~np.isfinite(t)))
+        raise NonFiniteError(path, f"line {nos[k]}: time {t[k]} is not finite")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        k = int(np.argmax(steps <= 0))
+        raise RecordError(
+            path, f"line {nos[k + 1]}: time {t[k + 1]:g} s does not increase "
+            f"(line {nos[k]} has {t[k]:g} s); the first column of a (time, "
+            "acceleration) file must increase strictly")
+    ch.times, ch.values = t, a
+
+
+def _headed(path: Path, ch: _Channel, names: list[str], head_line: int, w: np.ndarray,
+            nos: np.ndarray) -> list[_Channel]:
+    """The channels of a file with a header row: one per acceleration column, with the
+    unit its name states, the time column's times (section comment above)."""
+    k = len(names)
+    off = np.flatnonzero(w != k)
+    if off.size:
+        raise RecordError(path, f"line {nos[off[0]]} holds {w[off[0]]} values but the header "
+                          f"row (line {head_line}) names {k} columns: {', '.join(names)}")
+    kinds = [_column_kind(n) for n in names]
+    unknown = [n for n, kd in zip(names, kinds, strict=True) if kd is None]
+    if unknown:
+        raise RecordError(path, f"the header row (line {head_line}) names a column "
+                          f"{unknown[0]!r} that is neither time nor acceleration: name it time "
+                          "or t (time [s], t_ms) or acc, acceleration (with its unit: acc_g, "
+                          "acc [m/s2], acceleration (cm/s2)), or remove the column")
+    times = [i for i, kd in enumerate(kinds) if kd[0] == "time"]
+    accs = [i for i, kd in enumerate(kinds) if kd[0] == "acc"]
+    if len(times) > 1 or not accs:
+        what = "two time columns" if len(times) > 1 else "no acceleration column"
+        raise RecordError(path, f"the header row (line {head_line}) names {what}: "
+                          f"{', '.join(names)}")
+    table = ch.values.reshape(-1, k)
+    out = []
+    for i in accs:
+        c = _Channel(np.ascontiguousarray(table[:, i]), ch.unit, ch.dt,
+                     channel=names[i] if len(accs) > 1 else "",
+                     unit_from_file=ch.unit_from_file, extra=dict(ch.extra),
+                     note=f"columns named in a header row: {', '.join(names)}")
+        unit = kinds[i][1]
+        if unit is not None:
+            if ch.unit is not None and ch.unit != unit:
+                raise RecordUnitError(path, f"column {names[i]!r} states unit {unit!r} but "
+                                      f"{ch.extra['unit_source']} states {ch.unit!r}")
+            c.unit, c.unit_from_file = unit, True
+            c.extra["unit_source"] = f"column name {names[i]!r}, line {head_line}"
+        if times:
+            j = times[0]
+            scale = 1e-3 if kinds[j][1] == "ms" else 1.0
+            _time_column(path, c, table[:, j] * scale, c.values, nos)
+        out.append(c)
+    return out
 
 
 def _time_like(steps: np.ndarray) -> bool:
@@ -1109,8 +1360,15 @@ def _time_like(steps: np.ndarray) -> bool:
         return med != 0.0 and bool(np.mean(np.abs(steps - med) <= 0.5 * abs(med)) >= 0.9)
 
 
-def _parse_obspy(path: Path, format: str | None, raw: bytes) -> list[_Channel]:
+def _parse_obspy(path: Path, format: str | None, raw: bytes,
+                 response: str | os.PathLike | None = None) -> list[_Channel]:
+    """The traces of a file in one of ObsPy's formats, each with what its header says it
+    is not (`urmx.records.checks.quantity_problems`: a velocity, a seismometer, counts);
+    with `response` (a StationXML file) the instrument response is removed to
+    acceleration [m s-2]."""
     import obspy
+
+    from .checks import counts_problem, quantity_problems
 
     if format is None or format.upper() not in OBSPY_FORMATS:  # never auto-detect
         raise UnknownFormatError(path, f"ObsPy format {format!r} is not one urmx reads")
@@ -1119,16 +1377,49 @@ def _parse_obspy(path: Path, format: str | None, raw: bytes) -> list[_Channel]:
     except Exception as exc:  # noqa: BLE001
         raise UnknownFormatError(path, f"ObsPy cannot read it as {format}: "
                                  f"{_one_line(exc)}") from None
-    return [_Channel(tr.data.astype(float), None, tr.stats.delta, network=tr.stats.network,
-                     station=tr.stats.station, channel=tr.stats.channel,
-                     starttime=tr.stats.starttime, unit_from_file=False,
-                     note=f"read by ObsPy ({format.upper()})",
-                     extra={"dt_source": f"{format.upper()} header"}) for tr in st]
+    inventory = None if response is None else _inventory(path, response)
+    out = []
+    for tr in st:
+        problems = quantity_problems(tr.stats, inventory is not None)
+        note, unit = f"read by ObsPy ({format.upper()})", None
+        counts = counts_problem(tr.data.dtype, inventory is not None)
+        if counts:
+            problems.append(counts)
+        if inventory is not None:
+            try:
+                tr.remove_response(inventory=inventory, output="ACC")
+            except Exception as exc:  # noqa: BLE001
+                raise RecordError(path, f"the response in {str(response)!r} cannot be removed "
+                                  f"from {tr.id}: {_one_line(exc)}") from None
+            note, unit = note + f", response of {Path(response).name} removed (ACC)", "m/s2"
+        out.append(_Channel(tr.data.astype(float), unit, tr.stats.delta,
+                            network=tr.stats.network, station=tr.stats.station,
+                            channel=tr.stats.channel, starttime=tr.stats.starttime,
+                            unit_from_file=unit is not None, note=note,
+                            extra={"dt_source": f"{format.upper()} header",
+                                   "unit_source": f"response {Path(str(response)).name}",
+                                   "unit_confirmed": inventory is not None,
+                                   "problems": problems}))
+    return out
+
+
+def _inventory(path: Path, response: str | os.PathLike):
+    """The StationXML (or other ObsPy inventory) file `response`, read, or a one-line
+    error naming it."""
+    import obspy
+
+    if not Path(response).is_file():
+        raise MissingFileError(f"response file {str(response)!r} (for {path}) does not exist")
+    try:
+        return obspy.read_inventory(str(response))
+    except Exception as exc:  # noqa: BLE001
+        raise RecordError(path, f"the response file {str(response)!r} cannot be read as "
+                          f"StationXML: {_one_line(exc)}") from None
 
 
 _PARSERS = {"peer": _parse_peer, "geonet": _parse_geonet, "cosmos": _parse_cosmos,
             "smc": _parse_smc, "dmg": _parse_dmg, "knet": _parse_knet,
-            "columns": _parse_columns}
+            "columns": None}  # read in blocks: _parse_columns
 
 
 # -- the one builder: checks, units, resampling, provenance ----------------------------
@@ -1183,6 +1474,8 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
         raise TruncatedRecordError(path, f"{label} holds a single sample ({values[0]:g}), not "
                                    "an acceleration history")
     check_finite(values, label, path=path)
+    overrides = [_unusual(path, f"{label}: {problem}", allow_unusual)
+                 for problem in ch.extra.get("problems", ())]
     # units: a unit stated by the file and given by the caller must agree
     unit_source = ch.extra.get("unit_source", "header")
     if ch.unit is not None and ch.unit_from_file:
@@ -1230,39 +1523,73 @@ def _checked(path: Path, fmt: str, ch: _Channel, dt: float | None, unit: str | N
     if not (math.isfinite(step) and step > 0):
         raise MissingTimeStepError(path, f"{label} has time step dt={step!r} s; a time step "
                                    "must be a positive number of seconds")
-    lo, hi = DT_RANGE
-    if not allow_unusual and not lo <= step <= hi:
-        src = "given" if ch.dt is None and ch.times is None else \
-            "of the time column" if ch.times is not None else f"from the {dt_source}"
-        hint = (" (milliseconds given as seconds?)" if lo <= step / 1000 <= hi and step > hi
-                else " (implausibly small)" if step < lo else "")
-        raise UnusualRecordError(path, f"{label} has time step dt={step:g} s ({src}), outside "
-                                 f"the {lo:g}-{hi:g} s of strong-motion records{hint}{_ALLOW}")
     factor = _HEADER_UNITS[file_unit]
     data = values * factor
     if file_unit != "m/s2":
         processing.append(f"urmx: unit {file_unit} -> m/s2 (x {factor:g})")
+    src = unit_source if ch.unit_from_file and ch.unit else "given"
+    processing += overrides + _plausible(path, label, ch, values, data, float(step),
+                                         (file_unit, src, dt_source), allow_unusual)
+    record = dict(format=fmt, file=str(path), unit_in_file=file_unit,
+                  header_pga=None if ch.header_peak is None else ch.header_peak * factor,
+                  uneven=ch.times is not None)
+    return Samples(data, float(step), ch.station or path.stem, (ch.network or "")[:8],
+                   ch.channel or "", ch.starttime, record, processing)
+
+
+def _unusual(path: Path, problem: str, allow_unusual: bool) -> str:
+    """Refuse a record for `problem` (`UnusualRecordError`), or with ``allow_unusual`` the
+    processing step that says it was overridden (kept in a study archive's
+    ``record_processing``)."""
+    if not allow_unusual:
+        raise UnusualRecordError(path, problem + _ALLOW)
+    return f"urmx: allow_unusual overrode: {problem}"
+
+
+def _plausible(path: Path, label: str, ch: _Channel, values: np.ndarray, data: np.ndarray,
+               step: float, how: tuple[str, str, str], allow_unusual: bool) -> list[str]:
+    """The checks of a record's time step, PGA, velocity and displacement and of its
+    stated unit against its values (`urmx.records.checks`); each problem refuses the
+    record, or with ``allow_unusual`` becomes an ``overrode`` processing step (returned).
+    `how`: (unit of the values, where it comes from, where the time step comes from)."""
+    from .checks import motion_problem, unit_problem
+
+    file_unit, src, dt_source = how
+    out = []
+    lo, hi = DT_RANGE
+    if not lo <= step <= hi:
+        where = "given" if ch.dt is None and ch.times is None else \
+            "of the time column" if ch.times is not None else f"from the {dt_source}"
+        hint = (" (milliseconds given as seconds?)" if lo <= step / 1000 <= hi and step > hi
+                else " (implausibly small)" if step < lo else "")
+        out.append(_unusual(path, f"{label} has time step dt={step:g} s ({where}), outside "
+                            f"the {lo:g}-{hi:g} s of strong-motion records{hint}",
+                            allow_unusual))
     peak = float(np.max(np.abs(values)))
+    factor = _HEADER_UNITS[file_unit]
     pga_g = peak * factor / STANDARD_GRAVITY
     lo, hi = PGA_RANGE_G
-    if not allow_unusual and not lo <= pga_g <= hi:
+    if not lo <= pga_g <= hi:
         if peak == 0.0:
-            raise UnusualRecordError(path, f"every sample of {label} is zero{_ALLOW}")
+            return out + [_unusual(path, f"every sample of {label} is zero", allow_unusual)]
         fits = [f"as {u}: {peak * f / STANDARD_GRAVITY:.3g} g"
                 for u, f in UNIT_FACTORS.items()
                 if u != file_unit and lo <= peak * f / STANDARD_GRAVITY <= hi]
         hint = f" ({'; '.join(fits)})" if fits else ""
         verdict = ("the unit is wrong" if pga_g > hi else
                    "the unit is likely wrong, or the channel holds no strong motion")
-        src = unit_source if ch.unit_from_file and ch.unit else "given"
-        raise UnusualRecordError(path, f"{label} would have PGA {pga_g:.3g} g with unit "
-                                 f"{file_unit!r} ({src}), outside the {lo:g}-{hi:g} g of "
-                                 f"strong-motion records: {verdict}{hint}{_ALLOW}")
-    record = dict(format=fmt, file=str(path), unit_in_file=file_unit,
-                  header_pga=None if ch.header_peak is None else ch.header_peak * factor,
-                  uneven=ch.times is not None)
-    return Samples(data, float(step), ch.station or path.stem, (ch.network or "")[:8],
-                   ch.channel or "", ch.starttime, record, processing)
+        out.append(_unusual(path, f"{label} would have PGA {pga_g:.3g} g with unit "
+                            f"{file_unit!r} ({src}), outside the {lo:g}-{hi:g} g of "
+                            f"strong-motion records: {verdict}{hint}", allow_unusual))
+    elif src != "given":
+        confirmed = ch.header_peak is not None or bool(ch.extra.get("unit_confirmed"))
+        problem = unit_problem(peak, file_unit, src, confirmed)
+        if problem:
+            out.append(_unusual(path, f"{label}: {problem}", allow_unusual))
+    problem = motion_problem(data, step, f"with unit {file_unit!r} ({src})")
+    if problem:
+        out.append(_unusual(path, f"{label}: {problem}", allow_unusual))
+    return out
 
 
 def check_finite(data, label: str = "record", dt: float | None = None,

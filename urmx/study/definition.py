@@ -2,10 +2,10 @@
 
 A study's definition is the canonical form its cells' keys come from (`urmx.study.cells`):
 the kind, the kind's settings, the tail, t_rest (when not the default), the default impact
-law, the names of the cell dimensions (together, the *base*, kept as the archive's attribute ``study_definition``)
-and the values of each dimension (the wall, diaphragm and record ids, the COR values, ...:
-an archive's coordinates). The study's ``name`` is a label: two files of one name with other
-walls are two studies, a renamed file the same one.
+law, the names of the cell dimensions (together, the *base*, kept as the archive's
+attribute ``study_definition``) and the values of each dimension (the wall, diaphragm and
+record ids, the COR values, ...: an archive's coordinates). The study's ``name`` is a
+label: two files of one name with other walls are two studies, a renamed file the same one.
 
 A run into an existing archive (or parts folder) compares the two (:func:`compare`):
 

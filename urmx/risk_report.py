@@ -303,16 +303,22 @@ def risk_findings(r: dict | None) -> list[str]:
     risk, years = r["risk"], r["years"]
     low = risk.rate.where(risk.rate == risk.rate.min(), drop=True)
     high = risk.rate.where(risk.rate == risk.rate.max(), drop=True)
-    lines = [f"- **Collapse risk at the illustrative site** ({Path(r['curve'].source).name}). "
-             + ("" if enough_records(r.get("records", MIN_RISK)) else
-                f"(From {r['records']} records per wall: an estimate, no interval.) ")
-             +
-             f"The mean annual frequency of collapse runs from {_rate(float(risk.rate.min()))}"
-             f" ({str(low.wall.values[0])} on {str(low.diaphragm.values[0])}) to "
-             f"{_rate(float(risk.rate.max()))} ({str(high.wall.values[0])} on "
-             f"{str(high.diaphragm.values[0])}) per year: a probability of collapse in "
-             f"{years:g} years of {100 * float(risk.probability.min()):.2g} % to "
-             f"{100 * float(risk.probability.max()):.2g} %."]
+    site = f"- **Collapse risk at the illustrative site** ({Path(r['curve'].source).name}). "
+    if not enough_records(r.get("records", MIN_RISK)):
+        site += f"(From {r['records']} records per wall: an estimate, no interval.) "
+    where = f"({str(low.wall.values[0])} on {str(low.diaphragm.values[0])})"
+    if risk.rate.size == 1:
+        site += (f"The mean annual frequency of collapse is {_rate(float(risk.rate.min()))} "
+                 f"{where} per year: a probability of collapse in {years:g} years of "
+                 f"{pct(float(risk.probability.min()))}.")
+    else:
+        site += (f"The mean annual frequency of collapse runs from "
+                 f"{_rate(float(risk.rate.min()))} {where} to {_rate(float(risk.rate.max()))} "
+                 f"({str(high.wall.values[0])} on {str(high.diaphragm.values[0])}) per year: "
+                 f"a probability of collapse in {years:g} years of "
+                 f"{pct(float(risk.probability.min()))} to "
+                 f"{pct(float(risk.probability.max()))}.")
+    lines = [site]
     for g, v in r["change"].items():
         ratio = v["ratio"]
         down = [str(w) for w in ratio.wall.values if float(ratio.sel(wall=w)) < 1.0]

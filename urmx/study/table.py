@@ -98,17 +98,17 @@ def column_name(da: xr.DataArray, name: str) -> str:
 
 
 def _values(da: xr.DataArray) -> np.ndarray:
-    """A column's values: status codes as their text, empty text as missing (None)."""
+    """A column's values: status codes as their text, empty text as missing (NaN)."""
     values = np.asarray(da.values)
     meanings = str(da.attrs.get("flag_meanings", "")).split()
     if da.name == "status" and meanings:
         codes = np.asarray(da.attrs.get("flag_values", np.arange(len(meanings)))).tolist()
         lookup = dict(zip(codes, meanings, strict=False))
-        return np.array([lookup.get(int(v), None) if np.isfinite(v) else None
+        return np.array([lookup.get(int(v), np.nan) if np.isfinite(v) else np.nan
                          for v in values.astype(float).ravel()], dtype=object
                         ).reshape(values.shape)
     if values.dtype.kind in "OUS":
-        return np.array([None if str(v) == "" else str(v) for v in values.ravel()],
+        return np.array([np.nan if str(v) == "" else str(v) for v in values.ravel()],
                         dtype=object).reshape(values.shape)
     return values
 
@@ -148,6 +148,9 @@ def to_dataframe(archive: str | os.PathLike | xr.Dataset, where: Any = None):
         if not da.ndim or not set(da.dims) <= set(dims):
             continue
         columns[column_name(da, str(n))] = _flat(da, dims, grid)
+    for name, values in columns.items():
+        if values.dtype == object and pd.isna(values).all():  # no text at all: missing
+            columns[name] = values.astype(np.float64)
     return pd.DataFrame(columns)
 
 

@@ -340,3 +340,21 @@ def test_history_lists_every_contributing_run(tmp_path):
     urmx.run_study(study, out=tmp_path / "fresh.nc", scheduler="serial", progress=False,
                    command="alone")
     assert len(urmx.open_study(tmp_path / "fresh.nc").attrs["history"].splitlines()) == 1
+
+
+def test_sensitivity_figure_says_negative_indices_are_noise():
+    import xarray as xr
+
+    from urmx.uncertainty_report import _plot_sensitivity
+
+    s1 = np.array([[[0.5, -0.26]]])  # wall, diaphragm, parameter
+    sens = xr.Dataset({"prcc": (("wall", "diaphragm", "parameter"), s1 * 0.5),
+                       "s1": (("wall", "diaphragm", "parameter"), s1)},
+                      coords={"wall": ["s16"], "diaphragm": ["D1"],
+                              "parameter": ["cor", "pmr"]})
+    axes = _plot_sensitivity(sens, True)
+    assert "estimator noise" in axes[1].get_title() and "-0.26" in axes[1].get_title()
+    shown = axes[1].images[0].get_array()
+    assert float(shown.min()) == 0.0  # coloured as 0, not off the 0-1 scale
+    assert "-0.26" in [t.get_text() for t in axes[1].texts]  # the estimate still printed
+    assert "noise" not in axes[0].get_title()

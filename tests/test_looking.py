@@ -17,7 +17,7 @@ from urmx import generic_report, reporting
 from urmx.cli import main
 from urmx.errors import InputError
 from urmx.plot import empty_axes, panels
-from urmx.study.recompute import compare, compared, recompute
+from urmx.recompute import compare, compared, recompute
 from urmx.study.table import to_dataframe
 
 RECORDS = """
@@ -284,7 +284,7 @@ def test_show_reproduces_the_archive_and_refuses_a_changed_record(grid, tmp_path
 
 
 def test_show_refuses_another_kernel(grid, monkeypatch):
-    import urmx.study.recompute as R
+    import urmx.recompute as R
 
     monkeypatch.setattr(R, "SOURCE_HASH", "0" * 16)
     with pytest.raises(InputError, match="kernel"):

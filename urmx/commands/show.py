@@ -1,6 +1,6 @@
 """``urmx show ARCHIVE --wall W --diaphragm D --record R [--cor C --scale S] --plot FILE.png
 [--out cell.nc]``: one cell of a study archive computed again with its histories and drawn
-(`urmx.study.recompute`)."""
+(`urmx.recompute`)."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ def register(sub) -> None:
 
 def _show(args) -> int:
     from ..errors import InputError, check_output
-    from ..study.recompute import compare, compared, recompute
+    from ..recompute import compare, compared, recompute
 
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:

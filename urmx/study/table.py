@@ -3,11 +3,11 @@
 
 The cells are those of the archive's largest output over the study's dimensions (``wall``,
 ``diaphragm``, ``record``, ``cor`` and any of ``scale``, ``impact``, ``damping``,
-``sample``); a cell's kept time history and an IDA cell's curve (variables along
+``sample``); a cell's kept time history and a cell's curve over steps (variables along
 ``history``, ``time`` or an ``..._step`` dimension) are not scalars and are left out. The
 columns are the labels of those dimensions, then every coordinate and data variable over
 some of them (an item's property, such as a wall's slenderness or a record's PGA, repeated
-on each of its cells; a per-wall result, such as an IDA's median, on each of the wall's
+on each of its cells; a per-wall result, such as a fitted median, on each of the wall's
 cells), each named ``name [units]`` when it has units; ``status`` (a grid's analysis
 status) is the text of its ``flag_meanings`` (``ok``, ``collapsed``, ``event_limit``,
 ``not_run``). An empty text (a record without a channel) is a missing value, as a CSV

@@ -358,3 +358,21 @@ def test_sensitivity_figure_says_negative_indices_are_noise():
     assert float(shown.min()) == 0.0  # coloured as 0, not off the 0-1 scale
     assert "-0.26" in [t.get_text() for t in axes[1].texts]  # the estimate still printed
     assert "noise" not in axes[0].get_title()
+
+
+def test_one_record_ida_reports_draw_no_empty_axes(tmp_path, saved):
+    """One wall under one record: no fit, no rate, no interval; every figure still says
+    something in each panel and the report says why the numbers are missing."""
+    from urmx.fragility_report import write_report
+
+    _records(tmp_path)
+    study = tmp_path / "one.toml"
+    study.write_text(IDA.replace('records = ["r0", "r1", "r2"]', 'records = ["r0"]')
+                     .split("\n[records.r1]")[0] + "\n", encoding="utf-8")
+    out = tmp_path / "one.nc"
+    urmx.run_study(study, out=out, scheduler="serial", progress=False)
+    report = write_report(out, tmp_path / "frag").read_text(encoding="utf-8")
+    generic_report.write_report(out, tmp_path / "generic")
+    assert len(saved) >= 6 and all(n_empty == 0 for _, _, n_empty in saved), saved
+    assert "No rate: no wall has a fitted fragility" in report
+    assert "this archive has 1" in report and "recommends" not in report

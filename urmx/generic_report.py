@@ -288,6 +288,7 @@ def plot_output(da: xr.DataArray, ax=None, gone: int = 0):
         ax.plot(pos, np.atleast_1d(y), marker="o", linestyle="-" if numeric else "none",
                 ms=P.marker_size(len(xs), 7, 3),
                 label=str(label) if hue else None)  # categories are not joined by lines
+    P.say_if_empty(ax, "no cell has a value")
     if not numeric:
         slanted = sum(len(str(v)) for v in xs) > 40
         ax.set_xticks(pos, [str(v) for v in xs], rotation=30 if slanted else 0,

@@ -10,6 +10,7 @@ as ``long_name [units]`` and returns the axes it drew on.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -302,7 +303,7 @@ def plot_simulation(ds: xr.Dataset, axes: Sequence[Axes] | None = None) -> list[
 
 # ---- collapse fragility (IDA archives, `urmx.fragility_analysis`) ---------------------------
 
-def _say_if_empty(ax, text: str) -> None:
+def say_if_empty(ax, text: str) -> None:
     """Write `text` in the middle of a panel on which no data was drawn, so a panel says
     why it is empty rather than showing bare axes."""
     if not drawn(ax):
@@ -337,7 +338,7 @@ def plot_ida_curves(ds: xr.Dataset, diaphragm: str, axes=None) -> list:
         if np.isfinite(med):
             ax.axhline(med, color="C0", ls="--", lw=1.2, label=f"median {med:.3g} {unit}")
             ax.legend(fontsize="x-small", loc="upper left")
-        _say_if_empty(ax, "no analysis of this wall")
+        say_if_empty(ax, "no analysis of this wall")
         ax.set_title(f"{w} (h/t {float(c.slenderness):.0f}) on {diaphragm}", fontsize=9)
         ax.set_xlim(0, 1.05)
         ax.set_xlabel("instability ratio [1]")
@@ -400,13 +401,14 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
             n = c.record.size
             ax.plot(cap, (np.arange(cap.size) + 0.5) / n, "o", color=col, alpha=0.6,
                     ms=marker_size(n * d.wall.size, 5, 1.5), mew=0)
-        _say_if_empty(ax, "no record collapsed a wall here: no fit")
+        say_if_empty(ax, "no record collapsed a wall here: no fit")
         ax.set_title(lab, fontsize=9)
         ax.set_xlabel(f"{ds.attrs.get('intensity_measure', 'intensity')} [{unit}]")
         ax.set_ylabel("probability of collapse [1]")
         ax.set_ylim(0, 1)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize="x-small", ncol=2, title="wall")
+    if axes[0].get_legend_handles_labels()[0]:  # no fitted wall: no legend to show
+        axes[0].legend(fontsize="x-small", ncol=2, title="wall")
     return axes
 
 
@@ -456,7 +458,7 @@ def plot_median(ds: xr.Dataset, against: str = "slenderness", axes=None) -> list
                         ms=marker_size(len(labels), 6, 3),
                         label=str(w))
             _log_x(ax)
-            _say_if_empty(ax, "no finite median or diaphragm frequency")
+            say_if_empty(ax, "no finite median or diaphragm frequency")
             ax.set_xlabel("diaphragm frequency (Table IV SDOF) [Hz]")
             ax.legend(fontsize="x-small", ncol=3, title="wall", loc="best")
         ax.set_ylabel(f"median collapse {ds.attrs.get('intensity_measure', '')} [{unit}]")
@@ -522,8 +524,12 @@ def plot_efficiency(eff: xr.Dataset, ax=None):
         for i, x0 in enumerate(xs):
             ax.plot(np.full(disp.shape[1], x0), disp[i], "o", color=f"C{k}", alpha=0.5,
                     ms=marker_size(disp.shape[1], 5, 2), mew=0)
-        ax.plot(xs, np.nanmedian(disp, axis=1), "_", ms=12, mew=2.5, color=f"C{k}",
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no fit, said below
+            typical = np.nanmedian(disp, axis=1)
+        ax.plot(xs, typical, "_", ms=12, mew=2.5, color=f"C{k}",
                 label=im)
+    say_if_empty(ax, "no dispersion: a fit needs at least two records with a capacity")
     ax.set_xticks(np.arange(len(labels)), labels, fontsize=8)
     ax.set_ylabel("dispersion of the collapse capacity [1]")
     ax.set_ylim(bottom=0)
@@ -555,6 +561,7 @@ def plot_collapse_risk(risk: xr.Dataset, curve, axes=None) -> list:
         for lab in labels:
             ax.semilogy(slender, risk.rate.sel(diaphragm=lab), "o-", label=lab,
                         ms=marker_size(risk.wall.size, 6, 3))
+        say_if_empty(ax, "no rate: no wall has a fitted fragility")
         ax.set_xlabel("slenderness h/t [1]")
         ax.set_ylabel("mean annual frequency of collapse [1/yr]")
         ax.set_title(FA.GROUPS.get(g, g), fontsize=9)

@@ -304,6 +304,9 @@ def risk_findings(r: dict | None) -> list[str]:
     low = risk.rate.where(risk.rate == risk.rate.min(), drop=True)
     high = risk.rate.where(risk.rate == risk.rate.max(), drop=True)
     site = f"- **Collapse risk at the illustrative site** ({Path(r['curve'].source).name}). "
+    if not bool(np.isfinite(risk.rate).any()):
+        return [site + "No rate: no wall has a fitted fragility (a fit needs at least two "
+                f"records with a capacity; this archive has {r.get('records', '?')})."]
     if not enough_records(r.get("records", MIN_RISK)):
         site += f"(From {r['records']} records per wall: an estimate, no interval.) "
     where = f"({str(low.wall.values[0])} on {str(low.diaphragm.values[0])})"

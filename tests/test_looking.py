@@ -209,8 +209,9 @@ def test_export_round_trip(grid, tmp_path):
     out = tmp_path / "cells.csv"
     assert main(["export", str(grid), "--format", "csv", "--out", str(out)]) == 0
     back = pd.read_csv(out)
-    table = to_dataframe(grid)
+    table = urmx.study.to_dataframe(urmx.open_study(grid))
     pd.testing.assert_frame_equal(back, table, check_dtype=False)
+    pd.testing.assert_frame_equal(table, to_dataframe(grid))
     assert len(table) == 2 * 1 * 3 * 2 * 2  # one row per cell
     assert "peak_top_displacement [m]" in back.columns and "cor [1]" in back.columns
     assert set(back["status"]) <= {"ok", "collapsed", "event_limit", "not_run"}

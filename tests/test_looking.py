@@ -274,6 +274,8 @@ def test_show_reproduces_the_archive_and_refuses_a_changed_record(grid, tmp_path
     assert png.stat().st_size > 10_000 and nc.is_file()
     assert main(["show", str(grid), "--wall", "s24", "--diaphragm", "D1",
                  "--record", "r1"]) == 2  # two CORs in the archive: name one
+    with pytest.raises(InputError, match="no impact dimension"):
+        recompute(grid, "s24", "D1", "r1", cor=0.8, scale=2.0, impact="contact")
     record = grid.parent / "r1.txt"
     kept = record.read_bytes()
     try:
@@ -377,3 +379,18 @@ def test_one_record_ida_reports_draw_no_empty_axes(tmp_path, saved):
     assert len(saved) >= 6 and all(n_empty == 0 for _, _, n_empty in saved), saved
     assert "No rate: no wall has a fitted fragility" in report
     assert "this archive has 1" in report and "recommends" not in report
+
+
+def test_show_says_when_the_study_left_a_cell_out(tmp_path, capsys):
+    _records(tmp_path)
+    study = tmp_path / "pairs.toml"
+    study.write_text(GRID.replace("scale = [1.0, 2.0]\n", "scale = [1.0, 2.0]\n\n"
+                                  "[study.pairs]\ns16 = [\"r0\"]\ns24 = [\"r1\", \"r2\"]\n"),
+                     encoding="utf-8")
+    out = tmp_path / "pairs.nc"
+    urmx.run_study(study, out=out, scheduler="serial", progress=False)
+    args = ["show", str(out), "--diaphragm", "D1", "--cor", "0.6", "--scale", "1"]
+    assert main([*args, "--wall", "s16", "--record", "r1"]) == 0
+    assert "did not run this cell" in capsys.readouterr().out
+    assert main([*args, "--wall", "s16", "--record", "r0"]) == 0
+    assert "reproduced bit for bit" in capsys.readouterr().out

@@ -81,7 +81,24 @@ def pick(ds: xr.Dataset, wall: str, diaphragm: str, record: str,
     for dim in OPTIONAL:
         if dim in ds.dims and dim in ds.coords:
             cell[dim] = _label(ds, dim, optional.get(dim), f"--{dim}")
+        elif optional.get(dim) is not None:
+            raise InputError(f"--{dim} {optional[dim]}: the archive has no {dim} dimension "
+                             f"(it has {', '.join(map(str, ds.dims))})")
     return cell
+
+
+def not_run(archive: Any, cell: dict) -> bool:
+    """Whether the study left `cell` out (status ``not_run``: a wall not paired with the
+    record): the archive holds no result of it to compare with."""
+    from .reporting import open_archive
+
+    ds = open_archive(archive)
+    if "status" not in ds:
+        return False
+    meanings = str(ds["status"].attrs.get("flag_meanings", "")).split()
+    code = float(ds["status"].sel({k: v for k, v in cell.items() if k in ds["status"].dims}))
+    return "not_run" in meanings and np.isfinite(code) and \
+        meanings[int(code)] == "not_run"
 
 
 def check_provenance(ds: xr.Dataset, record_id: str, rec: Any) -> None:

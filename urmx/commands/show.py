@@ -42,7 +42,7 @@ def register(sub) -> None:
 
 def _show(args) -> int:
     from ..errors import InputError, check_output
-    from ..recompute import compare, compared, recompute
+    from ..recompute import compare, compared, not_run, recompute
 
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:
@@ -60,8 +60,11 @@ def _show(args) -> int:
 
     values = {n: ds[n].item() for n in ds.data_vars if ds[n].ndim == 0}
     print(_table(values))
-    differ = compare(args.archive, cell, ds)
-    n = compared(args.archive, cell)
+    skipped = not_run(args.archive, cell)
+    differ = {} if skipped else compare(args.archive, cell, ds)
+    n = 0 if skipped else compared(args.archive, cell)
+    if skipped:
+        print("the study did not run this cell (not among its pairs): nothing to compare")
     if n:
         print(f"the archive's {n} scalars of this cell: " + (
             "reproduced bit for bit" if not differ else

@@ -19,7 +19,8 @@ def register(sub) -> None:
     p.add_argument("--format", choices=("csv", "parquet"), default="csv",
                    help="csv (default) or parquet (needs pyarrow: pip install urmx[parquet])")
     p.add_argument("--out", metavar="FILE", default=None,
-                   help="file to write (default: the archive's name with .csv or .parquet; "
+                   help="file to write (default: the archive's file name with .csv or .parquet, "
+                        "in the current folder; "
                         "'-' writes CSV to standard output)")
     p.add_argument("--where", metavar="DIM=LABEL,...", default=None,
                    help="only these cells, e.g. wall=s12,record=elcentro (a dimension "

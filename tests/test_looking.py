@@ -16,7 +16,7 @@ import urmx
 from urmx import generic_report, reporting
 from urmx.cli import main
 from urmx.errors import InputError
-from urmx.plot import empty_axes, panels
+from urmx.plot import empty_axes, instability_history, panels, wall_of
 from urmx.recompute import compare, compared, recompute
 from urmx.study.table import to_dataframe
 
@@ -268,6 +268,11 @@ def test_show_reproduces_the_archive_and_refuses_a_changed_record(grid, tmp_path
         for name in ("peak_top_displacement", "instability_ratio", "collapsed"):
             assert np.float64(sim[name]).tobytes() == np.float64(stored[name]).tobytes()
         assert "time" in sim.dims and "top_displacement" in sim
+        # the drawn instability ratio over time: its peak on the record grid is at most
+        # the kernel's exact peak (tracked between samples too), and close below it
+        peak = float(instability_history(sim, wall_of(sim)).max())
+        exact = float(sim["instability_ratio"])
+        assert 0.9 * exact < peak <= exact * (1 + 1e-12)
     png, nc = tmp_path / "cell.png", tmp_path / "cell.nc"
     assert main(["show", str(grid), "--wall", "s24", "--diaphragm", "D1", "--record", "r1",
                  "--cor", "0.8", "--scale", "2", "--plot", str(png), "--out", str(nc)]) == 0

@@ -578,12 +578,10 @@ def instability_history(ds: xr.Dataset, wall) -> xr.DataArray:
     the pattern at that time: 11/12 case 3, 21/22 case 2) and |theta_upper| / theta0 of
     case 1, as the kernel defines the scalar (a running peak of it, on the record grid,
     approaches ``instability_ratio``; 1 at a collapse)."""
-    from .kernel import _theta0
-
-    P = wall.params
+    theta0 = {case: wall.segment(case).theta0 for case in (1, 2, 3)}
     fam1 = np.isin(ds["pattern"].values, (11, 12))
-    lower = np.abs(ds["theta_lower"].values) / np.where(fam1, _theta0(P, 3), _theta0(P, 2))
-    upper = np.abs(ds["theta_upper"].values) / _theta0(P, 1)
+    lower = np.abs(ds["theta_lower"].values) / np.where(fam1, theta0[3], theta0[2])
+    upper = np.abs(ds["theta_upper"].values) / theta0[1]
     return xr.DataArray(np.maximum(lower, upper), dims="time", coords={"time": ds["time"]},
                         name="instability_ratio",
                         attrs={"long_name": "governing instability ratio", "units": "1"})

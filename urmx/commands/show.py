@@ -56,10 +56,10 @@ def _show(args) -> int:
     where = " ".join(f"{k} {v}" for k, v in cell.items())
     print(f"{args.archive}: {where}: status {ds.attrs['status']}, "
           f"{ds.attrs['events']} events, analysed {ds.attrs['duration']:.6g} s")
-    from .simulate import _table
+    from .simulate import scalar_table
 
     values = {n: ds[n].item() for n in ds.data_vars if ds[n].ndim == 0}
-    print(_table(values))
+    print(scalar_table(values))
     skipped = not_run(args.archive, cell)
     differ = {} if skipped else compare(args.archive, cell, ds)
     n = 0 if skipped else compared(args.archive, cell)

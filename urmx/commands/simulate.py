@@ -62,7 +62,8 @@ def _record(args):
     return load_samples(args.record, args.records, channel=args.channel)
 
 
-def _table(values: dict) -> str:
+def scalar_table(values: dict) -> str:
+    """The scalar outputs of one analysis, a line each: name, value, units."""
     from urmx.variables import INTEGER_SCALARS, SCALARS, attrs
 
     width = max(map(len, SCALARS))
@@ -116,7 +117,7 @@ def _run(args) -> int:
           f"{values['impact']}  method {values['method']}")
     print(f"status {values['status']}  analysed {values['duration']:.6g} s  events "
           f"{values['events']}")
-    print(_table(values))
+    print(scalar_table(values))
     if args.out:
         from urmx.netcdf import write_netcdf
 

@@ -399,3 +399,19 @@ def test_show_says_when_the_study_left_a_cell_out(tmp_path, capsys):
     assert "did not run this cell" in capsys.readouterr().out
     assert main([*args, "--wall", "s16", "--record", "r0"]) == 0
     assert "reproduced bit for bit" in capsys.readouterr().out
+
+
+def test_at_the_minimum_the_statistics_are_stated(ida, tmp_path, monkeypatch):
+    """With the minimum lowered to the archive's 3 records, the same report recommends a
+    measure, with its share of records in two significant digits, and prints intervals
+    (a degenerate one flagged and explained)."""
+    from urmx.fragility_report import write_report
+
+    monkeypatch.setattr(reporting, "MIN_RECORDS", 3)
+    report = write_report(ida, tmp_path / "frag").read_text(encoding="utf-8")
+    assert "urmx recommends `" in report and "Not ranked" not in report
+    shares = re.findall(r"needs about ([0-9.e+-]+) % of the records", report)
+    assert shares and all(len(s.replace(".", "").lstrip("0")) <= 2 for s in shares), shares
+    assert "In brackets: the 90 % bootstrap interval" in report
+    if reporting.DEGENERATE in report:
+        assert reporting.DEGENERATE_NOTE in report

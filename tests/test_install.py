@@ -247,3 +247,37 @@ def test_quick_start_from_a_clone(tmp_path):
     status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True,
                             text=True, check=True).stdout
     assert status == "", status
+
+
+@pytest.mark.slow
+def test_installed_wheel_names_the_catalog(installed, tmp_path, records_dir, capsys):
+    """Issue 39: from a wheel outside the checkout, `urmx catalog list` lists the carried
+    catalog, an example's name stands for a wall file (`urmx simulate benchmark-wall
+    elcentro`, the checkout's numbers), `urmx catalog copy` copies a study out, and
+    `urmx.config.data_dir()` needs no argument."""
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    listed = _urmx(installed, work, "catalog", "list", records=records_dir)
+    assert listed.returncode == 0, listed.stderr
+    assert main(["catalog", "list"]) == 0
+    assert listed.stdout == capsys.readouterr().out
+    for name in ("benchmark-wall", "verification", "fema-p695-ida", "D5-pinned", "wall12"):
+        assert name in listed.stdout
+
+    sim = _urmx(installed, work, "simulate", "benchmark-wall", "elcentro", records=records_dir)
+    assert sim.returncode == 0, sim.stderr
+    assert main(["simulate", "benchmark-wall", "elcentro", "--records", str(records_dir)]) == 0
+    ours = capsys.readouterr().out
+    # the table of scalars (the first line names the wall file: the wheel's own copy)
+    assert sim.stdout.splitlines()[1:] == ours.splitlines()[1:]
+    assert str(installed) in sim.stdout.splitlines()[0]
+
+    copied = _urmx(installed, work, "catalog", "copy", "verification", records=records_dir)
+    assert copied.returncode == 0, copied.stderr
+    assert (work / "verification.toml").read_text(encoding="utf-8") == \
+        (ROOT / "catalog" / "studies" / "verification.toml").read_text(encoding="utf-8")
+    probe = subprocess.run(
+        [sys.executable, "-c", "import urmx.config as c; print(c.data_dir())"],
+        cwd=work, env={**os.environ, "PYTHONPATH": str(installed)}, capture_output=True,
+        text=True, check=True)
+    assert Path(probe.stdout.strip()) == installed / "urmx" / "_data" / "catalog"

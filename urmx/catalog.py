@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from .config import data_dir
-from .errors import MissingFileError, UrmxError, path_argument
+from .errors import InputError, MissingFileError, UrmxError, path_argument
 from .model import (
     EFFECTIVE_MASS,
     RIGID,
@@ -172,10 +172,10 @@ class _Source:
     in NFC (two keys of one table that are the same text in different normal forms are
     refused)."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, text: str | None = None):
         self.path = Path(path)
         try:
-            self.text = self.path.read_text(encoding="utf-8")
+            self.text = self.path.read_text(encoding="utf-8") if text is None else text
         except FileNotFoundError:
             raise MissingFileError(f"{self.path}: no such file") from None
         except (OSError, UnicodeDecodeError) as exc:  # a folder, unreadable, not text
@@ -453,7 +453,8 @@ def _building_wall(src: _Source, key: str, t: dict) -> Wall:
 def read_wall(path: str | os.PathLike) -> Wall:
     """A `Wall` from a TOML file: its fields (or building terms) in a ``[wall]`` table or at
     the top level (``name``, ``source`` and ``records`` may sit beside them, as in
-    ``walls.toml``).
+    ``walls.toml``). `path` may also name a catalog example (``benchmark-wall``;
+    `wall_path`).
 
     Raises
     ------
@@ -464,7 +465,7 @@ def read_wall(path: str | os.PathLike) -> Wall:
         key and (where it can be found) the line.
     """
     path_argument("read_wall", "path", path)
-    path = Path(path)
+    path = wall_path(path)
     if not path.is_file():
         raise MissingFileError(f"wall file {str(path)!r} does not exist")
     src = _Source(path)
@@ -847,10 +848,21 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
         listed diaphragms, a missing record file, a ``[study.<kind>]`` table no registered
         kind reads or that its kind refuses.
     """
+    path_argument("load_study", "path", path)
+    return _load_study(_Source(study_path(path, catalog)), catalog)
+
+
+def load_study_text(text: str, path: str | os.PathLike,
+                    catalog: str | os.PathLike | None = None) -> Study:
+    """`load_study` of a study file's `text` (an archive's ``study`` attribute), read as if
+    it were the file `path` (which need not exist): its own files are found relative to
+    `path`'s folder and its errors name `path`."""
+    return _load_study(_Source(Path(path), text=text), catalog)
+
+
+def _load_study(src: _Source, catalog: str | os.PathLike | None) -> Study:
     from .study import kinds
 
-    path_argument("load_study", "path", path)
-    src = _Source(study_path(path, catalog))
     s = _study_table(src, kinds.tables())
     if catalog is None and "catalog" in s:
         catalog = (src.path.parent / s["catalog"]).resolve()
@@ -1244,3 +1256,92 @@ def _histories(src: _Source, study: Study, entries: Any, groups: dict[str, list[
                         if study.paired(w, r) and h not in out:
                             out.append(h)
     return out
+
+
+# ---- the catalog by name (``urmx catalog list``, ``urmx catalog copy``, a wall by name) -------
+
+#: what ``urmx catalog copy`` copies: (section, file of an entry), in the order looked up
+COPYABLE = (("examples", "examples/{}.toml"), ("studies", "studies/{}.toml"))
+
+
+def _comment(path: Path) -> str:
+    """The first comment line of a TOML file, without its ``#`` (what the file is)."""
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("#"):
+            return line.lstrip("#").strip()
+        if line.strip():
+            break
+    return ""
+
+
+def catalog_entries(path: str | os.PathLike | None = None) -> dict[str, list[tuple[str, str]]]:
+    """The catalog by name: ``walls`` (the test walls and the parametric family),
+    ``diaphragms``, ``examples`` (wall files, `read_wall` by name) and ``studies`` (study
+    files, ``urmx run NAME``), each a list of (name, one line saying what it is).
+
+    Parameters
+    ----------
+    path : path, optional
+        A catalog folder (default: the one urmx carries, `catalog_dir`).
+    """
+    cat = load_catalog(path)
+    root = catalog_dir(path)
+    walls = [(k, f"{w.name or k}: h/t {w.slenderness:.3g}"
+              + (", parametric (supports from the diaphragm)" if w.parametric else
+                 ", on its own supports" if w.own_supports else ""))
+             for k, w in cat.walls.items()]
+    diaphragms = [(k, (d.description or "") + (" (rigid)" if d.rigid else
+                                               f" ({d.stiffness_value:.4g} N/m)"))
+                  for k, d in cat.diaphragms.items()]
+    files = {section: [(f.stem, _comment(f)) for f in sorted((root / section).glob("*.toml"))]
+             for section in ("examples", "studies")}
+    return {"walls": walls, "diaphragms": diaphragms, **files}
+
+
+def catalog_file(name: str, path: str | os.PathLike | None = None) -> Path | None:
+    """The catalog's example or study file called `name` (``benchmark-wall``,
+    ``verification``), or None."""
+    root = catalog_dir(path)
+    for _, pattern in COPYABLE:
+        found = root / pattern.format(name)
+        if found.is_file():
+            return found
+    return None
+
+
+def wall_path(name: str | os.PathLike) -> Path:
+    """A wall file: a path that exists, else the catalog example of that name
+    (``benchmark-wall`` -> ``catalog/examples/benchmark-wall.toml``, also from an
+    installed wheel); a missing one is a `MissingFileError` naming the examples."""
+    p = Path(name)
+    if p.exists():
+        return p
+    found = catalog_dir() / "examples" / f"{name}.toml"
+    if p.suffix != ".toml" and found.is_file():
+        return found
+    known = sorted(f.stem for f in (catalog_dir() / "examples").glob("*.toml"))
+    raise MissingFileError(f"wall file {str(name)!r} does not exist, nor is it a catalog "
+                           f"example ({', '.join(known)}; `urmx catalog list`)")
+
+
+def copy_entry(name: str, dest: str | os.PathLike | None = None) -> Path:
+    """Copy the catalog's example or study `name` to edit: into `dest` (a folder, or a
+    file name), default ``<name>.toml`` in the current folder; never over an existing
+    file. Returns the new file."""
+    import shutil
+
+    source = catalog_file(name)
+    if source is None:
+        known = [n for s in ("examples", "studies") for n, _ in catalog_entries()[s]]
+        close = difflib.get_close_matches(name, known, n=3)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
+        raise MissingFileError(f"{name!r} is no example or study of the catalog{hint}; "
+                               "`urmx catalog list` lists them")
+    target = Path(dest) if dest is not None else Path(source.name)
+    if target.is_dir():
+        target = target / source.name
+    if target.exists():
+        raise InputError(f"{str(target)!r} exists: give another DEST (nothing is "
+                         "overwritten)")
+    shutil.copyfile(source, target)
+    return target

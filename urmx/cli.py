@@ -23,7 +23,7 @@ import threading
 from pathlib import Path
 
 COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility",
-            "risk", "uncertainty", "assess")
+            "risk", "uncertainty", "assess", "export", "show", "catalog")
 
 
 class _Version(argparse.Action):

@@ -68,10 +68,12 @@ def need_checkout(what: str) -> Path:
     return root
 
 
-def data_dir(name: str) -> Path:
-    """urmx's data folder `name` (``catalog`` or ``records``): the checkout's top-level
-    folder when urmx runs from a checkout, else the copy a wheel carries as package data
-    (``urmx/_data/<name>``, found with `importlib.resources`)."""
+def data_dir(name: str = "catalog") -> Path:
+    """urmx's data folder `name`: ``"catalog"`` (the default: walls, diaphragms, building,
+    examples, studies, hazard) or ``"records"`` (the record manifest), as
+    ``data_dir("catalog")``; the checkout's top-level folder when urmx runs from a
+    checkout, else the copy a wheel carries as package data (``urmx/_data/<name>``, found
+    with `importlib.resources`)."""
     root = checkout()
     if root is not None:
         return root / name

@@ -49,7 +49,17 @@ from .markdown import number as _fmt
 from .markdown import table
 from .plot import plot_capacity_resonance as plot_resonance
 from .plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
-from .reporting import history_line, open_archive, save_figure
+from .reporting import (
+    DEGENERATE,
+    DEGENERATE_NOTE,
+    enough_records,
+    history_line,
+    interval,
+    open_archive,
+    records_per_cell,
+    save_figure,
+    too_few,
+)
 from .risk_report import (
     measure_findings,
     measure_numbers,
@@ -197,9 +207,13 @@ def _medians(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
     """The median collapse intensity and dispersion of every wall and diaphragm, with their
     bootstrap intervals when the archive holds them."""
     f, unit = P.display_scale(ds.collapse_intensity.attrs.get("units", ""))
-    ci = "median_collapse_intensity_lower" in d
+    n = records_per_cell(ds)
+    ci = "median_collapse_intensity_lower" in d and enough_records(n)
     level = f"{100 * float(ds.attrs.get('confidence_level', 0.9)):g} %"
     lines = ["## Median collapse intensity and dispersion", ""]
+    if not enough_records(n):
+        lines += [f"No intervals: {too_few(n, 'an interval')}; the medians and "
+                  "dispersions below are estimates from these records alone.", ""]
     if ci:
         lines += [f"In brackets: the {level} bootstrap interval (records resampled, "
                   f"{ds.attrs.get('bootstrap_resamples', '?')} resamples, seed "
@@ -212,10 +226,8 @@ def _medians(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
             return f"{_fmt(med)} ({_fmt(beta, 2)})"
         lo, hi = (float(c[f"median_collapse_intensity_{b}"]) * f for b in ("lower", "upper"))
         blo, bhi = (float(c[f"dispersion_{b}"]) for b in ("lower", "upper"))
-        if not np.isfinite(lo):  # too few records for an interval
-            return f"{_fmt(med)} ({_fmt(beta, 2)})"
-        return (f"{_fmt(med)} [{_fmt(lo)}-{_fmt(hi)}] ({_fmt(beta, 2)} "
-                f"[{_fmt(blo, 2)}-{_fmt(bhi, 2)}])")
+        return (f"{_fmt(med)} {interval(med, lo, hi, _fmt)} ({_fmt(beta, 2)} "
+                f"{interval(beta, blo, bhi, lambda v: _fmt(v, 2))})")
 
     for g, labels in FA.supports_groups(d).items():
         lines += [f"{GROUPS.get(g, g).capitalize()}: median [{unit}] (dispersion beta)", ""]
@@ -225,6 +237,8 @@ def _medians(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
             rows.append([str(w), f"{float(c.slenderness):.0f}"]
                         + [cell(c.sel(diaphragm=lab)) for lab in labels])
         lines += table(["wall", "h/t", *labels], rows) + [""]
+        if any(DEGENERATE in c for row in rows for c in row):
+            lines += [DEGENERATE_NOTE, ""]
     return lines
 
 

@@ -39,6 +39,9 @@ FULL_TABLE = 400  # cells up to which a table lists every cell of an output
 COLUMNS = 12  # values of a dimension shown as the columns of a table
 HUES = 10  # lines per figure
 PER_CELL = ("history", "time")  # dimensions of what a cell keeps, not of the study
+#: outputs whose collapsed cells are kept: they describe the collapse itself
+OF_COLLAPSE = ("collapsed", "collapse_time")
+COLLAPSED = "collapsed"  # the text of a collapsed cell in a table of a response quantity
 
 
 def outputs(ds: xr.Dataset) -> list[str]:
@@ -83,13 +86,14 @@ def write_report(archive: Any, out_dir: str | os.PathLike, name: str | None = No
     lines = _header(found) + _provenance(found) + _items(found, ds)
     main = main_outputs(ds)
     for name in main:
-        lines += _output(ds[name], name, out, figure=True)
+        lines += _output(ds[name], name, out, figure=True, gone=collapsed_cells(ds, name))
     rest = [n for n in outputs(ds) if n not in main]
     if rest:
         lines += ["## Other outputs", ""]
         for name in rest:
             lines += ["<details><summary>" + _title(ds[name], name) + "</summary>", ""]
-            lines += _output(ds[name], name, out, figure=False)[2:] + ["</details>", ""]
+            lines += _output(ds[name], name, out, figure=False,
+                             gone=collapsed_cells(ds, name))[2:] + ["</details>", ""]
     path = out / "REPORT.md"
     path.write_text("\n".join(lines).rstrip() + "\n", encoding="utf-8")
     return path
@@ -149,24 +153,47 @@ def _title(da: xr.DataArray, name: str) -> str:
     return f"{da.attrs.get('long_name', name)} (`{name}`)"
 
 
-def _output(da: xr.DataArray, name: str, out: Path, figure: bool) -> list[str]:
-    """The section of one output: its figure (main outputs) and its table(s)."""
+def collapsed_cells(ds: xr.Dataset, name: str) -> xr.DataArray | None:
+    """Where the cells of output `name` collapsed (True), when the archive says which
+    (``collapsed``) and `name` is a response quantity (not `OF_COLLAPSE`); else None.
+    A collapsed cell's peaks are those of a wall falling over: never averaged with the
+    cells that survived."""
+    if COLLAPSED not in ds or name in OF_COLLAPSE or \
+            not set(ds[COLLAPSED].dims) <= set(ds[name].dims):
+        return None
+    gone = (ds[COLLAPSED] == 1).broadcast_like(ds[name]).transpose(*ds[name].dims)
+    return gone if bool(gone.any()) else None
+
+
+def _output(da: xr.DataArray, name: str, out: Path, figure: bool,
+            gone: xr.DataArray | None = None) -> list[str]:
+    """The section of one output: its figure (main outputs) and its table(s); the cells
+    of `gone` (collapsed) are marked in a table of every cell, and left out of means."""
     shown = P.in_display_units(da)
     unit = shown.attrs.get("units", "")
     lines = [f"## {_title(da, name)}", ""]
+    n_gone = int(gone.sum()) if gone is not None else 0
+    kept = shown.where(~gone) if gone is not None else shown
     if figure:
-        lines += [save_figure(plot_output(shown), out, f"{name}.png"), ""]
+        lines += [save_figure(plot_output(kept, gone=n_gone), out, f"{name}.png"), ""]
     fixed = {d: shown[d].values[0] if d in shown.coords else 0 for d in shown.dims
              if shown.sizes[d] == 1}
     varying = [d for d in shown.dims if shown.sizes[d] > 1]
     cut = shown.isel({d: 0 for d in fixed})
+    cut_gone = gone.isel({d: 0 for d in fixed}) if gone is not None else None
     note = (" at " + ", ".join(f"{d} {_plain(v)}" for d, v in fixed.items())) if fixed else ""
     lines += [f"In {unit}{note}; `-`: no value (not run, or no result)." if unit not in
               ("", "1") else f"Values{note}; `-`: no value (not run, or no result).", ""]
+    if n_gone:
+        lines += [f"{n_gone} of {int(gone.size)} cells collapsed: "
+                  + ("marked `collapsed` (their peaks are those of a falling wall)"
+                     if shown.size <= FULL_TABLE else "left out of the means, minima and "
+                     "maxima (their peaks are those of a falling wall)") + ".", ""]
     if shown.size <= FULL_TABLE:
-        return lines + _cell_table(cut, varying) + [""]
+        return lines + _cell_table(cut, varying, cut_gone) + [""]
+    kept_cut = cut.where(~cut_gone) if cut_gone is not None else cut
     for dim in varying:
-        lines += _summary_table(cut, dim) + [""]
+        lines += _summary_table(kept_cut, dim, cut_gone) + [""]
     return lines
 
 
@@ -174,10 +201,16 @@ def _labels(da: xr.DataArray, dim: str) -> list:
     return list(da[dim].values) if dim in da.coords else list(range(da.sizes[dim]))
 
 
-def _cell_table(da: xr.DataArray, varying: list[str]) -> list[str]:
-    """Every cell: a row per combination of the varying dimensions but the column one."""
+def _value(v: xr.DataArray, gone: xr.DataArray | None) -> str:
+    return COLLAPSED if gone is not None and bool(gone) else number(float(v), 4)
+
+
+def _cell_table(da: xr.DataArray, varying: list[str],
+                gone: xr.DataArray | None = None) -> list[str]:
+    """Every cell: a row per combination of the varying dimensions but the column one;
+    a cell of `gone` reads `COLLAPSED`."""
     if not varying:
-        return table(["value"], [[number(float(da), 4)]])
+        return table(["value"], [[_value(da, gone)]])
     col = varying[-1] if da.sizes[varying[-1]] <= COLUMNS else None
     rows_dims = [d for d in varying if d != col]
     cols = _labels(da, col) if col else [None]
@@ -185,21 +218,28 @@ def _cell_table(da: xr.DataArray, varying: list[str]) -> list[str]:
     rows = []
     for combo in itertools.product(*(range(da.sizes[d]) for d in rows_dims)):
         cell = da.isel(dict(zip(rows_dims, combo, strict=True)))
-        values = [cell.isel({col: j}) for j in range(len(cols))] if col else [cell]
+        at = dict(zip(rows_dims, combo, strict=True))
+        pick = [{col: j} for j in range(len(cols))] if col else [{}]
         rows.append([_plain(_labels(da, d)[i]) for d, i in zip(rows_dims, combo, strict=True)]
-                    + [number(float(v), 4) for v in values])
+                    + [_value(cell.isel(p), None if gone is None else gone.isel(at).isel(p))
+                       for p in pick])
     return table(header, rows)
 
 
-def _summary_table(da: xr.DataArray, dim: str) -> list[str]:
-    """Per value of `dim`: cells with a value, mean, minimum and maximum over the rest."""
+def _summary_table(da: xr.DataArray, dim: str, gone: xr.DataArray | None = None
+                   ) -> list[str]:
+    """Per value of `dim`: cells with a value, mean, minimum and maximum over the rest
+    (`da` with its collapsed cells already masked; `gone` counts them)."""
     rest = [d for d in da.dims if d != dim]
     n = np.isfinite(da).sum(rest)
     with np.errstate(all="ignore"):
         stats = [da.mean(rest), da.min(rest), da.max(rest)]
-    rows = [[_plain(label), int(n[i])] + [number(float(s[i]), 4) for s in stats]
+    rows = [[_plain(label), int(n[i])] + ([int(gone.sum(rest)[i])] if gone is not None
+                                          else []) + [number(float(s[i]), 4) for s in stats]
             for i, label in enumerate(_labels(da, dim))]
-    return table([dim, "cells with a value", "mean", "min", "max"], rows)
+    head = [dim, "cells with a value"] + (["collapsed (left out)"] if gone is not None
+                                          else [])
+    return table(head + ["mean", "min", "max"], rows)
 
 
 def _axes_dims(da: xr.DataArray) -> tuple[str | None, str | None, list[str]]:
@@ -212,9 +252,27 @@ def _axes_dims(da: xr.DataArray) -> tuple[str | None, str | None, list[str]]:
     return x, hue, [d for d in rest if d != hue]
 
 
-def plot_output(da: xr.DataArray, ax=None):
+def _dim_label(da: xr.DataArray, dim: str | None) -> str:
+    """A dimension's axis label: ``long_name [units]`` from its coordinate's attributes
+    (the variable registry, `urmx.variables`), else its name."""
+    if dim is None:
+        return ""
+    attrs = da[dim].attrs if dim in da.coords else {}
+    if not attrs.get("long_name"):
+        from . import variables
+
+        try:
+            attrs = variables.attrs(dim)
+        except KeyError:
+            return dim
+    return P.label(xr.DataArray(0, attrs=attrs, name=dim))
+
+
+def plot_output(da: xr.DataArray, ax=None, gone: int = 0):
     """An output against one dimension, a line per value of a second, averaged over the
-    rest (cells with a value); labels from ``long_name [units]``. Returns the axes."""
+    rest (cells with a value: `gone` collapsed cells already masked out, counted in the
+    title); labels from ``long_name [units]`` (the dimension's too: ``coefficient of
+    restitution [1]``), markers sized to the number of points. Returns the axes."""
     ax = ax if ax is not None else P.panels(None, 1)[0]
     x, hue, rest = _axes_dims(da)
     with np.errstate(all="ignore"):
@@ -228,15 +286,21 @@ def plot_output(da: xr.DataArray, ax=None):
         y = cut.isel({hue: j}) if hue else cut
         y = y.transpose(*([x] if x else [])).values
         ax.plot(pos, np.atleast_1d(y), marker="o", linestyle="-" if numeric else "none",
+                ms=P.marker_size(len(xs), 7, 3),
                 label=str(label) if hue else None)  # categories are not joined by lines
+    P.say_if_empty(ax, "no cell has a value")
     if not numeric:
         slanted = sum(len(str(v)) for v in xs) > 40
         ax.set_xticks(pos, [str(v) for v in xs], rotation=30 if slanted else 0,
                       ha="right" if slanted else "center")
         ax.margins(x=0.1)
-    ax.set_xlabel(x or "")
+    ax.set_xlabel(_dim_label(da, x))
     ax.set_ylabel("\n".join(textwrap.wrap(P.label(da), 45)), fontsize="small")
-    ax.set_title(f"{da.name}" + (f": mean over {', '.join(rest)}" if rest else ""),
+    what = "mean over " + ", ".join(rest) if rest else ""
+    if gone:
+        what += (" of the cells that did not collapse" if rest else "cells that did not "
+                 "collapse") + f" ({gone} collapsed, left out)"
+    ax.set_title("\n".join(textwrap.wrap(f"{da.name}" + (f": {what}" if what else ""), 60)),
                  fontsize="medium")
     if hue:
         ax.legend(title=hue, fontsize="small")

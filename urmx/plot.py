@@ -10,6 +10,7 @@ as ``long_name [units]`` and returns the axes it drew on.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -67,15 +68,54 @@ def label(da) -> str:
 
 
 def panels(axes, n: int, ncols: int | None = None) -> list[Axes]:
+    """`n` axes: the first `n` of `axes` when given, else a new figure of `n` panels in
+    rows of at most `ncols` (never more columns than panels, and no empty panel: the
+    grid's spare places are removed, so a study of one wall or one diaphragm gets one
+    panel, not one drawn and two empty)."""
     if axes is not None:
         axes = list(np.ravel(axes))
         if len(axes) < n:
             raise InputError(f"this figure needs {n} axes, {len(axes)} were given")
         return axes[:n]
-    ncols = ncols or n
+    n = max(int(n), 1)
+    ncols = min(ncols or n, n)
     nrows = -(-n // ncols)
     fig = Figure(figsize=(PANEL[0] * ncols, PANEL[1] * nrows), layout="constrained")
-    return list(np.ravel(fig.subplots(nrows, ncols, squeeze=False)))[:n]
+    grid = list(np.ravel(fig.subplots(nrows, ncols, squeeze=False)))
+    for spare in grid[n:]:
+        spare.remove()
+    return grid[:n]
+
+
+def marker_size(n: int, few: float = 6.0, many: float = 2.0, knee: int = 8) -> float:
+    """A marker size [points] for a panel of `n` points: `few` up to `knee` points (a
+    study of 3 records shows 3 dots one can see), falling as 1/sqrt(n) to `many` (40
+    records x 9 walls stay apart)."""
+    if n <= knee:
+        return few
+    return max(many, few * math.sqrt(knee / n))
+
+
+def empty_axes(fig) -> list[Axes]:
+    """The axes of `fig` on which nothing is drawn (no line, collection, patch, image or
+    text of data): what a report must never save."""
+    return [ax for ax in fig.axes if not (drawn(ax) or ax.images or ax.texts or ax.tables)]
+
+
+def _finite_points(values) -> bool:
+    try:
+        return bool(np.isfinite(np.asarray(values, dtype=float)).any())
+    except (TypeError, ValueError):  # categories, dates: points all the same
+        return len(values) > 0
+
+
+def drawn(ax) -> int:
+    """How many data artists of `ax` show something: lines with at least one finite
+    point, collections with paths or offsets, patches (an empty ``ax.plot([], [])`` does
+    not count)."""
+    lines = sum(1 for ln in ax.lines if _finite_points(ln.get_ydata()))
+    shown = sum(1 for c in ax.collections if len(c.get_paths()) or len(c.get_offsets()))
+    return lines + shown + len(ax.patches)
 
 
 def _hue_label(da: xr.DataArray, hue: str, value) -> str:
@@ -95,7 +135,7 @@ def plot_vs_slenderness(da: xr.DataArray, hue: str = "diaphragm", ax: Axes | Non
     da = da.sortby("slenderness")
     x = da["slenderness"].values
     for value in da[hue].values:
-        ax.plot(x, da.sel({hue: value}).values, marker="o", ms=3,
+        ax.plot(x, da.sel({hue: value}).values, marker="o", ms=marker_size(x.size, 5, 3),
                 label=_hue_label(da, hue, value))
     ax.set_xlabel("slenderness h/t [1]")
     ax.set_ylabel(label(da))
@@ -263,6 +303,14 @@ def plot_simulation(ds: xr.Dataset, axes: Sequence[Axes] | None = None) -> list[
 
 # ---- collapse fragility (IDA archives, `urmx.fragility_analysis`) ---------------------------
 
+def say_if_empty(ax, text: str) -> None:
+    """Write `text` in the middle of a panel on which no data was drawn, so a panel says
+    why it is empty rather than showing bare axes."""
+    if not drawn(ax):
+        ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center",
+                fontsize="small", color="0.35", wrap=True)
+
+
 def _im_scale(ds: xr.Dataset) -> tuple[float, str]:
     """Factor and unit label to show an IDA archive's intensity measure in."""
     return display_scale(ds.collapse_intensity.attrs.get("units", ""))
@@ -285,11 +333,12 @@ def plot_ida_curves(ds: xr.Dataset, diaphragm: str, axes=None) -> list:
             ax.plot(x[ok], y[ok], color="0.55", lw=0.6, alpha=0.7)
             cap = float(cell.collapse_intensity) * f
             if float(cell.censored) == 0:  # a collapse (1: censored; NaN: not run)
-                ax.plot([1.0], [cap], "o", ms=2.5, color="C3")
+                ax.plot([1.0], [cap], "o", ms=marker_size(c.record.size, 5, 2.5), color="C3")
         med = float(c.median_collapse_intensity) * f
         if np.isfinite(med):
             ax.axhline(med, color="C0", ls="--", lw=1.2, label=f"median {med:.3g} {unit}")
             ax.legend(fontsize="x-small", loc="upper left")
+        say_if_empty(ax, "no analysis of this wall")
         ax.set_title(f"{w} (h/t {float(c.slenderness):.0f}) on {diaphragm}", fontsize=9)
         ax.set_xlim(0, 1.05)
         ax.set_xlabel("instability ratio [1]")
@@ -330,7 +379,9 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
     d = FA.first_cor(ds)
     labels = [str(x) for x in d.diaphragm.values]
     axes = panels(axes, len(labels), ncols=3)
-    top = float(np.nanmax(d.collapse_intensity.where(d.censored == 0))) * f * 1.2
+    collapsed = d.collapse_intensity.where(d.censored == 0).values
+    top = (float(np.nanmax(collapsed)) if np.isfinite(collapsed).any() else
+           float(ds.attrs.get("ida_max_intensity", 1.0))) * f * 1.2
     x = np.linspace(1e-3, top, 300)
     cmap = _slenderness_colors(d)
     for ax, lab in zip(axes, labels, strict=True):
@@ -348,13 +399,16 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
             cap = np.sort(c.collapse_intensity.where(c.censored == 0).values * f)
             cap = cap[np.isfinite(cap)]
             n = c.record.size
-            ax.plot(cap, (np.arange(cap.size) + 0.5) / n, ".", ms=2, color=col, alpha=0.6)
+            ax.plot(cap, (np.arange(cap.size) + 0.5) / n, "o", color=col, alpha=0.6,
+                    ms=marker_size(n * d.wall.size, 5, 1.5), mew=0)
+        say_if_empty(ax, "no record collapsed a wall here: no fit")
         ax.set_title(lab, fontsize=9)
         ax.set_xlabel(f"{ds.attrs.get('intensity_measure', 'intensity')} [{unit}]")
         ax.set_ylabel("probability of collapse [1]")
         ax.set_ylim(0, 1)
         ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize="x-small", ncol=2, title="wall")
+    if axes[0].get_legend_handles_labels()[0]:  # no fitted wall: no legend to show
+        axes[0].legend(fontsize="x-small", ncol=2, title="wall")
     return axes
 
 
@@ -391,7 +445,8 @@ def plot_median(ds: xr.Dataset, against: str = "slenderness", axes=None) -> list
         med = d.median_collapse_intensity.sel(diaphragm=labels) * f
         if against == "slenderness":
             for lab in labels:
-                ax.plot(d.slenderness, med.sel(diaphragm=lab), "o-", ms=3, label=lab)
+                ax.plot(d.slenderness, med.sel(diaphragm=lab), "o-", label=lab,
+                        ms=marker_size(d.wall.size, 6, 3))
             ax.set_xlabel("slenderness h/t [1]")
             ax.legend(fontsize="x-small", title="diaphragm")
         else:
@@ -399,9 +454,11 @@ def plot_median(ds: xr.Dataset, against: str = "slenderness", axes=None) -> list
             for w in d.wall.values:
                 fx = freq.sel(wall=w).values
                 ok = np.isfinite(fx)
-                ax.plot(fx[ok], med.sel(wall=w).values[ok], "o-", ms=3, color=cmap[str(w)],
+                ax.plot(fx[ok], med.sel(wall=w).values[ok], "o-", color=cmap[str(w)],
+                        ms=marker_size(len(labels), 6, 3),
                         label=str(w))
             _log_x(ax)
+            say_if_empty(ax, "no finite median or diaphragm frequency")
             ax.set_xlabel("diaphragm frequency (Table IV SDOF) [Hz]")
             ax.legend(fontsize="x-small", ncol=3, title="wall", loc="best")
         ax.set_ylabel(f"median collapse {ds.attrs.get('intensity_measure', '')} [{unit}]")
@@ -420,7 +477,7 @@ def plot_capacity_resonance(t: xr.Dataset, axes=None) -> list:
     for ax, g in zip(axes, groups, strict=False):
         sel = t.group.values == g
         x, y = t.frequency_ratio.values[sel], np.exp(t.log_ratio.values[sel])
-        ax.plot(x, y, ".", ms=2, alpha=0.35, color="0.4")
+        ax.plot(x, y, "o", ms=marker_size(x.size, 5, 1.5), mew=0, alpha=0.35, color="0.4")
         b = FA.binned(t, g)
         xs = [math.sqrt(lo * hi) if np.isfinite(hi) and lo > 0 else (hi / 2 if lo == 0 else
               lo * 2) for lo, hi, _, _ in b]
@@ -441,7 +498,7 @@ def plot_stiffening(st: dict, ds: xr.Dataset, ax=None):
     slenderness (`urmx.fragility_analysis.stiffening`), one line per supports group."""
     ax = ax if ax is not None else panels(None, 1)[0]
     for g, v in st.items():
-        ax.plot(ds.slenderness, v["ratio"], "o-", ms=3,
+        ax.plot(ds.slenderness, v["ratio"], "o-", ms=marker_size(ds.wall.size, 6, 3),
                 label=f"{FA.GROUPS.get(g, g).split(' (')[0]}: {v['stiff']} / {v['soft']}")
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_xlabel("slenderness h/t [1]")
@@ -465,9 +522,14 @@ def plot_efficiency(eff: xr.Dataset, ax=None):
         xs = np.arange(len(labels)) + (k - (len(measures) - 1) / 2) * width
         disp = eff.dispersion.sel(measure=im).transpose("diaphragm", "wall").values
         for i, x0 in enumerate(xs):
-            ax.plot(np.full(disp.shape[1], x0), disp[i], ".", ms=3, color=f"C{k}", alpha=0.5)
-        ax.plot(xs, np.nanmedian(disp, axis=1), "_", ms=12, mew=2.5, color=f"C{k}",
+            ax.plot(np.full(disp.shape[1], x0), disp[i], "o", color=f"C{k}", alpha=0.5,
+                    ms=marker_size(disp.shape[1], 5, 2), mew=0)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: no fit, said below
+            typical = np.nanmedian(disp, axis=1)
+        ax.plot(xs, typical, "_", ms=12, mew=2.5, color=f"C{k}",
                 label=im)
+    say_if_empty(ax, "no dispersion: a fit needs at least two records with a capacity")
     ax.set_xticks(np.arange(len(labels)), labels, fontsize=8)
     ax.set_ylabel("dispersion of the collapse capacity [1]")
     ax.set_ylim(bottom=0)
@@ -497,10 +559,79 @@ def plot_collapse_risk(risk: xr.Dataset, curve, axes=None) -> list:
     slender = risk.slenderness if "slenderness" in risk.coords else np.arange(risk.wall.size)
     for ax, (g, labels) in zip(axes[1:], groups.items(), strict=True):
         for lab in labels:
-            ax.semilogy(slender, risk.rate.sel(diaphragm=lab), "o-", ms=3, label=lab)
+            ax.semilogy(slender, risk.rate.sel(diaphragm=lab), "o-", label=lab,
+                        ms=marker_size(risk.wall.size, 6, 3))
+        say_if_empty(ax, "no rate: no wall has a fitted fragility")
         ax.set_xlabel("slenderness h/t [1]")
         ax.set_ylabel("mean annual frequency of collapse [1/yr]")
         ax.set_title(FA.GROUPS.get(g, g), fontsize=9)
         ax.legend(fontsize="x-small", title="diaphragm")
         ax.grid(True, which="both", alpha=0.3)
     return axes
+
+
+# ---- one cell of a study, recomputed (``urmx show``) ----------------------------------------
+
+def instability_history(ds: xr.Dataset, wall) -> xr.DataArray:
+    """The governing instability ratio over time of one analysis with histories: the
+    larger of |theta_lower| / theta0 (theta0 of the lower segment's case in the family of
+    the pattern at that time: 11/12 case 3, 21/22 case 2) and |theta_upper| / theta0 of
+    case 1, as the kernel defines the scalar (a running peak of it, on the record grid,
+    approaches ``instability_ratio``; 1 at a collapse)."""
+    theta0 = {case: wall.segment(case).theta0 for case in (1, 2, 3)}
+    fam1 = np.isin(ds["pattern"].values, (11, 12))
+    lower = np.abs(ds["theta_lower"].values) / np.where(fam1, theta0[3], theta0[2])
+    upper = np.abs(ds["theta_upper"].values) / theta0[1]
+    return xr.DataArray(np.maximum(lower, upper), dims="time", coords={"time": ds["time"]},
+                        name="instability_ratio",
+                        attrs={"long_name": "governing instability ratio", "units": "1"})
+
+
+def wall_of(ds: xr.Dataset):
+    """The `urmx.Wall` of an analysis Dataset, from its ``wall_<field>`` attributes."""
+    from .model import Wall
+
+    fields = {k[len("wall_"):]: v for k, v in ds.attrs.items() if k.startswith("wall_")}
+    for k in ("allow_unusual",):
+        if k in fields:
+            fields[k] = bool(fields[k])
+    return Wall(**fields)
+
+
+def plot_cell(ds: xr.Dataset, title: str = "", axes=None) -> list[Axes]:
+    """One cell over time (``urmx show``): (a) displacement at crack height and at the
+    top [mm]; (b) the rocking pattern; (c) the ground acceleration beneath, as analysed
+    [g]; (d) the governing instability ratio (`instability_history`) with its running
+    peak and the exact peak the kernel tracks. A dashed red line at a collapse."""
+    if axes is None:
+        fig = Figure(figsize=(9, 8.5), layout="constrained")
+        axes = fig.subplots(4, 1, sharex=True,
+                            gridspec_kw={"height_ratios": (3, 1.2, 1.6, 1.8)})
+    ax1, ax2, ax3, ax4 = panels(axes, 4)
+    t = ds["time"].values
+    for name, colour in (("top_displacement", "C0"), ("crack_displacement", "C1")):
+        ax1.plot(t, 1e3 * ds[name].values, color=colour, lw=0.9,
+                 label=ds[name].attrs["long_name"])
+    ax1.set_ylabel("displacement relative\nto ground [mm]")
+    ax1.legend(loc="upper right", fontsize="small")
+    levels = np.array([0, 11, 12, 21, 22])  # 0 after a stop
+    ax2.step(t, np.searchsorted(levels, ds["pattern"].values), where="post", color="k", lw=0.9)
+    ax2.set_yticks(range(levels.size), [str(v) for v in levels])
+    ax2.set_ylabel("rocking\npattern")
+    f, unit = display_scale("m s-2")
+    ax3.plot(t, f * ds["ground_acceleration"].values, color="0.3", lw=0.6)
+    ax3.set_ylabel(f"ground\nacceleration [{unit}]")
+    ratio = instability_history(ds, wall_of(ds)).values
+    ax4.plot(t, ratio, color="C3", lw=0.7, label="instability ratio")
+    ax4.plot(t, np.maximum.accumulate(ratio), color="C3", lw=1.2, ls=":", label="running peak")
+    ax4.axhline(float(ds["instability_ratio"]), color="k", lw=0.8, ls="--",
+                label=f"exact peak {float(ds['instability_ratio']):.3g}")
+    ax4.set_ylabel("governing instability\nratio [1]")
+    ax4.set_xlabel(label(ds["time"]))
+    ax4.legend(loc="upper left", fontsize="small")
+    for ax in (ax1, ax2, ax3, ax4):
+        ax.grid(alpha=0.3)
+        if int(ds["collapsed"]):
+            ax.axvline(float(ds["collapse_time"]), color="r", ls="--", lw=0.8)
+    ax1.set_title(title or f"status {ds.attrs['status']}", fontsize="medium")
+    return [ax1, ax2, ax3, ax4]

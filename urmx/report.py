@@ -321,10 +321,14 @@ def _fig8(rep: _Report, lines: list[str]) -> None:
     want = [d for d in ("D1", paper.stiff, paper.pinned) if d in ids]
     hist = A.displacement_histories(ds, paper.height, want, paper.record, cor=paper.cor)
     shown = P.in_display_units(hist)
-    lines.append(rep.save(P.plot_histories(shown, hue="diaphragm",
-                                           variables=["top_displacement",
-                                                      "crack_displacement"]),
-                          "fig8_histories.png"))
+    axes = P.plot_histories(shown, hue="diaphragm",
+                            variables=["top_displacement", "crack_displacement"])
+    slender = float(ds["slenderness"].sel(wall=hist.attrs["wall"]))
+    axes[0].figure.suptitle(  # which wall and record the figure shows, on the figure
+        f"wall {hist.attrs['wall']} (h {hist.attrs['height']:.3g} m, h/t {slender:.0f}), "
+        f"record {hist.attrs['record']}, COR {hist.attrs['cor']:g}",
+        fontsize="medium")
+    lines.append(rep.save(axes, "fig8_histories.png"))
     lines += ["", f"Wall `{hist.attrs['wall']}` (h = {hist.attrs['height']:.3g} m), "
               f"record `{hist.attrs['record']}`, COR {hist.attrs['cor']:g}; "
               f"diaphragms {', '.join(map(str, hist['diaphragm'].values))}.", ""]

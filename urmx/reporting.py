@@ -71,3 +71,64 @@ def save_figure(axes, folder: Path, name: str, dpi: int = 110, palette: bool = F
     with Image.open(buf) as im:
         im.convert("RGB").quantize(256).save(folder / name, optimize=True)
     return f"![{name}]({name})"
+
+
+# ---- what a report may state from how many records ---------------------------------------------
+
+#: records per wall and diaphragm below which a report states no statistic across records
+#: (recommendation, efficiency ratio, interval, ranking) and says what it would need. The
+#: standard error of a lognormal median goes as beta / sqrt(n) (Baker 2015, Earthquake
+#: Spectra 31(1), section "Uncertainty"): with beta 0.3-0.5 and 10 records it is 10-16 %,
+#: with 3 records 17-29 %, no basis for ranking measures whose dispersions differ by less.
+#: The bound is urmx's choice (no standard gives one); FEMA P695 uses 44 records.
+MIN_RECORDS = 10
+#: mark of an interval that cannot be trusted as one (a bound equal to its estimate)
+DEGENERATE = "†"
+
+
+def records_per_cell(ds: xr.Dataset) -> int:
+    """The fewest records with a capacity over the (wall, diaphragm, cor) cells of an IDA
+    archive: what its statistics across records rest on."""
+    ran = np.isfinite(ds["collapse_intensity"]).sum("record")
+    return int(ran.min()) if ran.size else 0
+
+
+def enough_records(n: int) -> bool:
+    return n >= MIN_RECORDS
+
+
+def too_few(n: int, what: str) -> str:
+    """What a left-out statistic would need: ``{what} needs at least 10 records per wall
+    and diaphragm; this archive has 3``."""
+    return (f"{what} needs at least {MIN_RECORDS} records per wall and diaphragm "
+            f"(`urmx.reporting.MIN_RECORDS`); this archive has {n}")
+
+
+def pct(fraction: float) -> str:
+    """A fraction as a percentage with two significant digits (``0.4 %``, ``12 %``)."""
+    if not np.isfinite(fraction):
+        return "-"
+    return f"{float(f'{100.0 * fraction:.2g}'):g} %"
+
+
+def ratio(value: float) -> str:
+    """A ratio with two significant digits."""
+    return "-" if not np.isfinite(value) else f"{float(f'{value:.2g}'):g}"
+
+
+def interval(estimate: float, lo: float, hi: float, fmt) -> str:
+    """``[lo-hi]`` of an interval around `estimate` (each formatted by `fmt`); ``[no
+    interval]`` when a bound is missing; ``[lo-hi]†`` when a bound equals the estimate
+    (the resamples cannot move it: too few distinct records, `DEGENERATE`)."""
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return "[no interval]"
+    text = f"[{fmt(lo)}-{fmt(hi)}]"
+    if np.isfinite(estimate) and (fmt(lo) == fmt(estimate) or fmt(hi) == fmt(estimate)
+                                  or lo == estimate or hi == estimate):
+        text += DEGENERATE
+    return text
+
+
+DEGENERATE_NOTE = (f"{DEGENERATE}: a bound of this interval equals its estimate: the "
+                   "resamples of the records cannot move it (too few distinct records), so "
+                   "it is no confidence interval.")

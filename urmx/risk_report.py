@@ -22,9 +22,22 @@ from .fragility.fits import CONFIDENCE
 from .fragility_analysis import GROUPS, MEASURES, STIFFEN
 from .markdown import number as _fmt
 from .markdown import table
-from .reporting import save_figure
+from .reporting import (
+    DEGENERATE,
+    DEGENERATE_NOTE,
+    enough_records,
+    interval,
+    pct,
+    records_per_cell,
+    save_figure,
+    too_few,
+)
+from .reporting import (
+    ratio as _ratio,
+)
 
 LEVEL = f"{100 * CONFIDENCE:g} %"
+MIN_RISK = 10**9  # an archive of risk numbers made without a record count: intervals kept
 OLDER = ("_Not available: the archive lacks the scale factor at collapse and the records' "
          "measures (written by an older urmx); run `urmx ida` again._")
 
@@ -62,7 +75,7 @@ def measure_numbers(ds: xr.Dataset, records_dir=None) -> dict | None:
     known = np.isfinite(mag) & np.isfinite(dist)
     suff = FA.sufficiency(ds, mag, dist) if known.sum() >= 5 else None
     return {"eff": eff, "suff": suff, "alt": FA.sa_avg_alternatives(ds, records_dir),
-            "mag": mag, "dist": dist}
+            "mag": mag, "dist": dist, "records": records_per_cell(ds)}
 
 
 def _overall(eff: xr.Dataset) -> dict[str, float]:
@@ -79,6 +92,10 @@ def measure_findings(m: dict | None) -> list[str]:
     """The findings bullet: the dispersions and the measure urmx recommends."""
     if m is None:
         return []
+    if not enough_records(m.get("records", 0)):
+        return [f"- **Intensity measure.** Not ranked: "
+                f"{too_few(m['records'], 'comparing the measures')} (the dispersions are "
+                "listed in the section below, without a recommendation)."]
     overall = _overall(m["eff"])
     best = _recommended(m)
     others = sorted((v for k, v in overall.items() if k != best))
@@ -94,21 +111,26 @@ def measure_findings(m: dict | None) -> list[str]:
             f"{alone} against {_fmt(others[0], 2)}-{_fmt(others[-1], 2)} in the other measures ("
             + ", ".join(f"`{k}` {_fmt(v, 2)}" for k, v in overall.items() if k != best)
             + f"); `{best}` is the most efficient on {wins} of {n} diaphragms. For the same "
-            f"confidence in a median it needs about {100 * share:.0f} % of the records the "
+            f"confidence in a median it needs about {pct(share)} of the records the "
             f"least efficient measure needs (the standard error goes as beta / sqrt(n)). "
             f"urmx recommends `{best}` (section \"Which intensity measure predicts collapse "
             "best?\")."]
 
 
-def _efficiency_rows(eff: xr.Dataset) -> list[list]:
+def _efficiency_rows(eff: xr.Dataset, ranked: bool = True) -> list[list]:
+    """A row per diaphragm (and ``all``); the `best` column only when `ranked` (enough
+    records to rank the measures)."""
     rows = []
     for lab in [str(x) for x in eff.diaphragm.values]:
         e = eff.sel(diaphragm=lab)
         rows.append([lab] + [_fmt(float(e.typical_dispersion.sel(measure=im)), 2)
-                             for im in MEASURES] + [f"`{str(e.best.values)}`"])
+                             for im in MEASURES] + ([f"`{str(e.best.values)}`"] if ranked
+                                                     else []))
     overall = _overall(eff)
+    if eff.diaphragm.size == 1:
+        return rows
     return rows + [["all"] + [_fmt(overall[im], 2) for im in MEASURES]
-                   + [f"`{min(overall, key=overall.get)}`"]]
+                   + ([f"`{min(overall, key=overall.get)}`"] if ranked else [])]
 
 
 def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
@@ -118,6 +140,7 @@ def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
     if m is None:
         return lines + [OLDER, ""]
     eff = m["eff"]
+    ranked = enough_records(m.get("records", 0))
     lines += [
         "One IDA run gives the capacities in every measure: the scale factor at collapse "
         "(`collapse_scale`) times each record's intensity in the measure (`record_pga`, "
@@ -128,7 +151,10 @@ def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
         "Efficiency: the dispersion beta of the lognormal fit of the capacities in each "
         "measure, median over the walls of each diaphragm (and over every wall and "
         "diaphragm: `all`), and the measure with the lowest (`best`):", "",
-        *table(["diaphragm", *MEASURES, "best"], _efficiency_rows(eff)), "",
+        *table(["diaphragm", *MEASURES] + (["best"] if ranked else []),
+               _efficiency_rows(eff, ranked)), "",
+        *([] if ranked else
+          [f"_No measure is ranked best: {too_few(m['records'], 'a ranking')}._", ""]),
         _save(P.plot_efficiency(eff), out, "efficiency.png"), ""]
     if m["alt"]:
         rows = [["default (above)", _fmt(_overall(eff)["sa_avg"], 2)]] + [
@@ -142,6 +168,10 @@ def measures_section(ds: xr.Dataset, m: dict | None, out: Path) -> list[str]:
                   "either half of the records, split by record order or alternately); on "
                   "other walls or records it is a reasoned start, not a proven optimum.", ""]
     lines += _sufficiency(m)
+    if not ranked:
+        return lines + [f"**Recommendation.** None: "
+                        f"{too_few(m['records'], 'a recommendation')}.", "",
+                        *_measure_table(ds, eff, False)]
     return lines + _recommendation(m) + _measure_table(ds, eff)
 
 
@@ -173,7 +203,7 @@ def _recommendation(m: dict) -> list[str]:
         text += " (elsewhere " + ", ".join(f"`{b}` on {d}" for d, b in others.items()) + ")"
     text += (f"; the records needed for the same confidence in a median scale with beta "
              f"squared, so `{best}` needs about "
-             f"{100 * (overall[best] / overall[second]) ** 2:.0f} % of the records "
+             f"{pct((overall[best] / overall[second]) ** 2)} of the records "
              f"`{second}` needs")
     trends = _trends(m, best)
     if trends is not None:
@@ -183,10 +213,13 @@ def _recommendation(m: dict) -> list[str]:
     def span(im: str) -> str:
         t = eff.typical_dispersion.sel(measure=im)
         lo, hi = str(t.idxmin("diaphragm").values), str(t.idxmax("diaphragm").values)
-        return (f"from {_fmt(float(t.sel(diaphragm=lo)), 2)} on {lo} to "
+        if lo == hi:
+            return f"is {_fmt(float(t.sel(diaphragm=lo)), 2)} on {lo}"
+        return (f"runs from {_fmt(float(t.sel(diaphragm=lo)), 2)} on {lo} to "
                 f"{_fmt(float(t.sel(diaphragm=hi)), 2)} on {hi}")
 
-    return [text + f". Over the diaphragms `sa_diaphragm` runs {span('sa_diaphragm')}, "
+    over = "Over the diaphragms" if eff.diaphragm.size > 1 else "On the one diaphragm"
+    return [text + f". {over} `sa_diaphragm` {span('sa_diaphragm')}, "
             f"`{best}` {span(best)}.", ""]
 
 
@@ -218,18 +251,29 @@ def _sufficiency(m: dict) -> list[str]:
                 "slope on ln distance [1]", "cases p < 0.05"], rows), ""]
 
 
-def _measure_table(ds: xr.Dataset, eff: xr.Dataset) -> list[str]:
+def _measure_table(ds: xr.Dataset, eff: xr.Dataset, intervals: bool = True) -> list[str]:
+    """Every wall and diaphragm's dispersion in each measure, with its interval when
+    `intervals` (enough records), a degenerate one flagged (`urmx.reporting.interval`)."""
     rows = []
+    def two(v):
+        return _fmt(v, 2)
+
     for lab in [str(x) for x in eff.diaphragm.values]:
         for w in eff.wall.values:
             e = eff.sel(diaphragm=lab, wall=w)
             rows.append([lab, str(w)] + [
-                f"{_fmt(float(e.dispersion.sel(measure=im)), 2)} "
-                f"[{_fmt(float(e.dispersion_lower.sel(measure=im)), 2)}-"
-                f"{_fmt(float(e.dispersion_upper.sel(measure=im)), 2)}]" for im in MEASURES])
-    return ["### Dispersion of every wall and diaphragm", "",
-            f"Dispersion beta in each measure with its {LEVEL} bootstrap interval:", "",
-            *table(["diaphragm", "wall", *MEASURES], rows), ""]
+                two(float(e.dispersion.sel(measure=im))) + (" " + interval(
+                    float(e.dispersion.sel(measure=im)),
+                    float(e.dispersion_lower.sel(measure=im)),
+                    float(e.dispersion_upper.sel(measure=im)), two) if intervals else "")
+                for im in MEASURES])
+    text = " ".join(" ".join(r) for r in rows)
+    head = (f"Dispersion beta in each measure with its {LEVEL} bootstrap interval:"
+            if intervals else "Dispersion beta in each measure (no intervals: "
+            f"{too_few(int(ds.record.size), 'an interval')}):")
+    return ["### Dispersion of every wall and diaphragm", "", head, "",
+            *table(["diaphragm", "wall", *MEASURES], rows), "",
+            *([DEGENERATE_NOTE, ""] if DEGENERATE in text else [])]
 
 
 # ---- collapse risk ---------------------------------------------------------------------------
@@ -245,7 +289,7 @@ def risk_numbers(ds: xr.Dataset, hazard, spectrum, years: float) -> dict | None:
     risk = FA.collapse_risk(ds, curve, years)
     return {"curve": curve, "risk": risk, "change": FA.risk_change(risk),
             "margins": None if spectrum is None else FA.margins(ds, spectrum),
-            "years": years}
+            "years": years, "records": records_per_cell(ds)}
 
 
 def _rate(v: float) -> str:
@@ -259,19 +303,31 @@ def risk_findings(r: dict | None) -> list[str]:
     risk, years = r["risk"], r["years"]
     low = risk.rate.where(risk.rate == risk.rate.min(), drop=True)
     high = risk.rate.where(risk.rate == risk.rate.max(), drop=True)
-    lines = [f"- **Collapse risk at the illustrative site** ({Path(r['curve'].source).name}). "
-             f"The mean annual frequency of collapse runs from {_rate(float(risk.rate.min()))}"
-             f" ({str(low.wall.values[0])} on {str(low.diaphragm.values[0])}) to "
-             f"{_rate(float(risk.rate.max()))} ({str(high.wall.values[0])} on "
-             f"{str(high.diaphragm.values[0])}) per year: a probability of collapse in "
-             f"{years:g} years of {100 * float(risk.probability.min()):.2g} % to "
-             f"{100 * float(risk.probability.max()):.2g} %."]
+    site = f"- **Collapse risk at the illustrative site** ({Path(r['curve'].source).name}). "
+    if not bool(np.isfinite(risk.rate).any()):
+        return [site + "No rate: no wall has a fitted fragility (a fit needs at least two "
+                f"records with a capacity; this archive has {r.get('records', '?')})."]
+    if not enough_records(r.get("records", MIN_RISK)):
+        site += f"(From {r['records']} records per wall: an estimate, no interval.) "
+    where = f"({str(low.wall.values[0])} on {str(low.diaphragm.values[0])})"
+    if risk.rate.size == 1:
+        site += (f"The mean annual frequency of collapse is {_rate(float(risk.rate.min()))} "
+                 f"{where} per year: a probability of collapse in {years:g} years of "
+                 f"{pct(float(risk.probability.min()))}.")
+    else:
+        site += (f"The mean annual frequency of collapse runs from "
+                 f"{_rate(float(risk.rate.min()))} {where} to {_rate(float(risk.rate.max()))} "
+                 f"({str(high.wall.values[0])} on {str(high.diaphragm.values[0])}) per year: "
+                 f"a probability of collapse in {years:g} years of "
+                 f"{pct(float(risk.probability.min()))} to "
+                 f"{pct(float(risk.probability.max()))}.")
+    lines = [site]
     for g, v in r["change"].items():
         ratio = v["ratio"]
         down = [str(w) for w in ratio.wall.values if float(ratio.sel(wall=w)) < 1.0]
         lines.append(f"- **Stiffening {v['soft']} -> {v['stiff']} in annual risk, "
                      f"{_group_name(g)} walls.** The rate of collapse changes by a factor "
-                     f"{_fmt(float(ratio.min()), 2)} to {_fmt(float(ratio.max()), 2)}; it "
+                     f"{_ratio(float(ratio.min()))} to {_ratio(float(ratio.max()))}; it "
                      f"falls for {len(down)} of {ratio.wall.size} walls.")
     return lines
 
@@ -282,17 +338,23 @@ def risk_lines(ds: xr.Dataset, r: dict, heading: str = "###") -> list[str]:
     risk, curve, years = r["risk"], r["curve"], r["years"]
     f, unit = P.display_scale(curve.units)
     d = FA.first_cor(ds)
+    sure = enough_records(r.get("records", MIN_RISK))
     lines = []
     for g, labels in FA.supports_groups(d).items():
         rows = [[str(w), f"{float(d.slenderness.sel(wall=w)):.0f}"] + [
-            f"{_rate(float(c.rate))} [{_rate(float(c.rate_lower))}-"
-            f"{_rate(float(c.rate_upper))}], {100 * float(c.probability):.2g} %"
+            _rate(float(c.rate)) + (" " + interval(float(c.rate), float(c.rate_lower),
+                                                   float(c.rate_upper), _rate)
+                                    if sure else "") + f", {pct(float(c.probability))}"
             for c in (risk.sel(wall=w, diaphragm=lab) for lab in labels)]
             for w in d.wall.values]
+        said = (f"with its {LEVEL} bootstrap interval" if sure else
+                f"(no interval: {too_few(r['records'], 'an interval')})")
         lines += [f"{heading} {GROUPS.get(g, g).capitalize()}", "",
-                  f"Mean annual frequency of collapse [1/yr] with its {LEVEL} bootstrap "
-                  f"interval, and the probability of collapse in {years:g} years:", "",
+                  f"Mean annual frequency of collapse [1/yr] {said}, and the probability "
+                  f"of collapse in {years:g} years:", "",
                   *table(["wall", "h/t", *labels], rows), ""]
+        if any(DEGENERATE in c for row in rows for c in row):
+            lines += [DEGENERATE_NOTE, ""]
     lines += _change_lines(d, r, heading)
     if r["margins"] is not None:
         lines += _margin_lines(d, r, heading)

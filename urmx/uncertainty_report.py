@@ -318,8 +318,11 @@ def _sensitivity(ds: xr.Dataset, sens: xr.Dataset, out: Path) -> list[str]:
 
 
 def _heat(ax, values: np.ndarray, rows: list[str], cols: list[str], lim: tuple, title: str,
-          cmap: str) -> None:
-    im = ax.imshow(values, cmap=cmap, vmin=lim[0], vmax=lim[1], aspect="auto")
+          cmap: str, colour: np.ndarray | None = None) -> None:
+    """A heat map of `values` (printed in each cell), coloured by `colour` (default the
+    values: a clipped copy when the values may leave the colour scale's range)."""
+    im = ax.imshow(values if colour is None else colour, cmap=cmap, vmin=lim[0],
+                   vmax=lim[1], aspect="auto")
     ax.set_xticks(range(len(cols)), cols, rotation=30, fontsize=7)
     ax.set_yticks(range(len(rows)), rows, fontsize=6)
     for (i, j), v in np.ndenumerate(values):
@@ -340,8 +343,13 @@ def _plot_sensitivity(sens: xr.Dataset, show_s1: bool) -> list:
     _heat(axes[0], np.array([c.prcc.values for c in pick]), rows, cols, (-1, 1),
           "partial rank correlation", "RdBu_r")
     if show_s1:
-        _heat(axes[1], np.array([c.s1.values for c in pick]), rows, cols, (0, 1),
-              "first-order Sobol' index (RBD-FAST)", "Greens")
+        s1 = np.array([c.s1.values for c in pick])
+        title = "first-order Sobol' index (RBD-FAST)"
+        if np.nanmin(s1) < 0:  # an index is >= 0: a negative estimate is estimator noise
+            title += ("\nnegative estimates (down to "
+                      f"{np.nanmin(s1):.2f}) are estimator noise, coloured as 0")
+        _heat(axes[1], s1, rows, cols, (0, 1), title, "Greens",
+              colour=np.clip(s1, 0.0, None))
     return axes
 
 

@@ -11,7 +11,8 @@ def register(subparsers) -> None:
         description="Rock one wall (a TOML file of urmx.Wall fields) under one record "
                     "(a file or a manifest record id) and print the scalar outputs.")
     p.add_argument("wall", metavar="WALL.toml",
-                   help="wall file: Wall fields in a [wall] table or at the top level")
+                   help="wall file: Wall fields in a [wall] table or at the top level; or "
+                        "the name of a catalog example (benchmark-wall; urmx catalog list)")
     p.add_argument("record", metavar="RECORD", help="record file path or manifest record id")
     file_options(p, "the record file")
     p.add_argument("--scale", type=float, default=1.0,
@@ -63,7 +64,8 @@ def _record(args):
     return load_samples(args.record, args.records, channel=args.channel)
 
 
-def _table(values: dict) -> str:
+def scalar_table(values: dict) -> str:
+    """The scalar outputs of one analysis, a line each: name, value, units."""
     from urmx.variables import INTEGER_SCALARS, SCALARS, attrs
 
     width = max(map(len, SCALARS))
@@ -81,13 +83,14 @@ def _run(args) -> int:
     import contextlib
     import math
 
-    from urmx.catalog import read_wall
+    from urmx.catalog import read_wall, wall_path
     from urmx.errors import InputError, check_output, writing
     from urmx.model import allow_unusual_walls
 
     if not (math.isfinite(args.scale) and args.scale > 0):
         raise InputError(f"--scale: scale={args.scale!r} must be a positive factor (a record "
                          "is scaled, never reversed or zeroed)")
+    args.wall = str(wall_path(args.wall))  # a catalog example by name
     read = [("the wall file", args.wall), *record_inputs(args.record, args.records)]
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:
@@ -116,7 +119,7 @@ def _run(args) -> int:
           f"{values['impact']}  method {values['method']}")
     print(f"status {values['status']}  analysed {values['duration']:.6g} s  events "
           f"{values['events']}")
-    print(_table(values))
+    print(scalar_table(values))
     if args.out:
         from urmx.netcdf import write_netcdf
 

@@ -45,7 +45,9 @@ def study_options(p) -> None:
     quiet, force and the size limits)."""
     p.add_argument("--scheduler", default=None,
                    help='dask scheduler address (tcp://host:8786), "threads", "processes" or '
-                        '"serial"; default: local worker processes, one per core')
+                        '"serial"; default: the active distributed.Client if there is one, '
+                        'else in-process for a study estimated under 10 s, else a local '
+                        'cluster (worker processes, one per core)')
     p.add_argument("--records", default=None, help="records folder (default $URMX_RECORDS)")
     p.add_argument("--batch-size", type=_batch_size, default=16,
                    help="cells (analyses for a grid) per batch, >= 1 (default 16); batches "

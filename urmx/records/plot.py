@@ -69,7 +69,10 @@ def plot_record(trace, out: str | os.PathLike | None = None, title: str | None =
     ax.set_xscale("log")
     ax.set_xlabel(_label(rs.period))
     ax.set_ylabel(f"PSA, {rs.attrs['damping']:.0%} damping [g]")
-    fig.suptitle(title or trace.id)
+    import textwrap
+
+    # wrapped: a long title (event, station, component) must not run off the figure
+    fig.suptitle("\n".join(textwrap.wrap(title or str(trace.id), 80)))
     if out is not None:
         fig.savefig(out, dpi=110)
     return fig

@@ -25,6 +25,8 @@ names. The kind-blind engine runs them all:
 - `urmx.study.archive`: :func:`open_study`;
 - `urmx.study.summary`: :func:`info` (what an archive holds and how it was made) and
   :func:`diff` (what differs between two archives), ``urmx info`` and ``urmx diff``;
+- `urmx.study.table`: :func:`to_dataframe`, an archive as one row per cell (``urmx
+  export``);
 - `urmx.study.samples`: :func:`resolve_records`, a study's records (manifest ids and the
   study file's own record files) as `urmx.records.Record`, with their provenance.
 
@@ -52,10 +54,11 @@ _PUBLIC = {
     "open_study": "archive",
     "info": "summary", "diff": "summary", "format_info": "summary", "format_diff": "summary",
     "resolve_records": "samples", "RecordData": "samples",
+    "to_dataframe": "table",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
 }
 _SUBMODULES = ("engine", "limits", "cells", "batches", "parts", "sources", "clients",
-               "progress", "dataset", "archive", "samples", "kinds", "summary")
+               "progress", "dataset", "archive", "samples", "kinds", "summary", "table")
 __all__ = sorted(_PUBLIC)
 
 

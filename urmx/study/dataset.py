@@ -136,10 +136,26 @@ def _diaphragm_coords(study: Any) -> dict[str, xr.Variable]:
         "diaphragm_damping": coord("diaphragm_damping", "diaphragm", np.array(
             [d.damping for d in study.diaphragms])),
     }
+    if specimen:  # each wall's own top support, which the 1-D coordinates cannot hold
+        coords.update(_own_support_coords(cells))
     if study.own_supports:
         coords["supports"] = coord("supports", "diaphragm", np.array(
             [study.supports_of(d) for d in study.diaphragms], dtype=object))
     return coords
+
+
+def _own_support_coords(cells: list[list[Any]]) -> dict[str, xr.Variable]:
+    """The top support of every (wall, diaphragm) cell of a study whose walls stand on
+    their own supports: stiffness (inf when rigid), mass and damping ratio."""
+    def value(w, name: str) -> float:
+        v = getattr(w, name)
+        return math.inf if v == "rigid" else float(v)
+
+    return {name: coord(name, ("wall", "diaphragm"),
+                        np.array([[value(w, field) for w in row] for row in cells]))
+            for name, field in (("cell_stiffness", "top_stiffness"),
+                                ("cell_diaphragm_mass", "top_mass"),
+                                ("cell_diaphragm_damping", "top_damping"))}
 
 
 def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:

@@ -37,7 +37,9 @@ How a run goes (:func:`run_study`):
    with an archive these are dask arrays gathered from the parts slab by slab, so the
    archive is written (through `urmx.netcdf.write_netcdf`, under a temporary name, then
    renamed) without holding the results; then the parts folder is removed and the archive
-   reopened lazily. The archive's ``history`` carries the time the run was first started.
+   reopened lazily. The archive's ``history`` carries the time the run was first started,
+   and, after it, the lines of the earlier archive whose cells the run took over (one line
+   per contributing run, newest first; `merged_history`).
 
 Counts of the last run (cells found in parts, taken from the archive, computed): :func:`last_run`.
 
@@ -462,9 +464,11 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     if store is not None:
         stats.from_parts, stats.rejected = _resume(store, sources)
         notes = (*notes, *_unused_parts(store, sources, cells))
+    earlier = ""
     if archive is not None:
         try:
             stats.from_archive = take_over(sources, archive[0])
+            earlier = str(archive[0].attrs.get("history", "")) if stats.from_archive else ""
         finally:
             archive[0].close()
     cut = Cut(cells, batch_size, sources.done())
@@ -489,6 +493,17 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     attrs = {**global_attrs(study, started, command), "study_definition": base(study, kind)}
     return _assemble(cells, sources, records, attrs,
                      lazy=store is not None)
+    attrs = global_attrs(study, started, command)
+    attrs["history"] = merged_history(attrs["history"], earlier)
+    return _assemble(cells, sources, records, attrs, lazy=store is not None)
+
+
+def merged_history(line: str, earlier: str) -> str:
+    """An archive's ``history`` (CF convention: one line per run that contributed cells,
+    newest first): this run's `line`, then the earlier archive's lines when cells were
+    taken over from it (each line once)."""
+    lines = [line] + [x for x in earlier.splitlines() if x.strip() and x != line]
+    return "\n".join(lines)
 
 
 def _assemble(cells: Cells, sources: Sources, records: dict, attrs: dict,

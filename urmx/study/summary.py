@@ -77,15 +77,34 @@ def cell_counts(ds: xr.Dataset, kind: str | None) -> dict[str, int]:
     return dict(found) if found else {}
 
 
+def _no_value(values: np.ndarray) -> bool:
+    """A coordinate that holds no value at all (every entry NaN: a diaphragm property of
+    the ``specimen`` diaphragm, whose walls bring their own)."""
+    return values.dtype.kind == "f" and bool(np.isnan(values).all())
+
+
 def _item_coords(ds: xr.Dataset) -> dict[str, dict[str, list]]:
     """dimension -> {coordinate -> values} of the coordinates along that dimension alone
-    (its labels first), for dimensions that have more than their labels."""
+    (its labels first), for dimensions that have more than their labels; then ``wall,
+    diaphragm`` -> the coordinates over both (each wall's supports on each diaphragm:
+    its frequency, and on its own supports their stiffness, mass and damping), a row
+    per cell. Coordinates with no value at all are left out."""
     out: dict[str, dict[str, list]] = {}
     for dim in ds.dims:
-        names = [n for n, c in ds.coords.items() if c.dims == (dim,) and n != dim]
+        names = [n for n, c in ds.coords.items() if c.dims == (dim,) and n != dim
+                 and not _no_value(np.asarray(c.values))]
         if names:
             labels = ds[dim].values.tolist() if dim in ds.coords else list(range(ds.sizes[dim]))
             out[str(dim)] = {str(dim): labels, **{n: ds[n].values.tolist() for n in names}}
+    pair = ("wall", "diaphragm")
+    names = [n for n, c in ds.coords.items() if c.dims == pair]
+    if names and all(d in ds.coords for d in pair):
+        grid = ds[names[0]]
+        rows = {d: np.broadcast_to(grid[d].values[:, None] if d == "wall" else
+                                   grid[d].values[None, :], grid.shape).ravel().tolist()
+                for d in pair}
+        out["wall, diaphragm"] = {**rows, **{n: np.asarray(ds[n].transpose(*pair).values)
+                                             .ravel().tolist() for n in names}}
     return out
 
 

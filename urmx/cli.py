@@ -89,9 +89,9 @@ def _exit_now(command: str, signum: int, out: str | None = None) -> None:
         what = "SIGTERM" if signum == signal.SIGTERM else "Ctrl-C"
         note = ""
         if out is not None:
-            from .commands.study import _kept
+            from .commands.study import kept_note
 
-            note = _kept(Path(out))
+            note = kept_note(Path(out))
         sys.stderr.write(f"urmx {command}: {what} again: stopped at once"
                          + (f"; {note}" if note else "") + "\n")
         sys.stderr.flush()

@@ -114,7 +114,7 @@ def command_line() -> str:
     return "urmx " + " ".join(sys.argv[1:])
 
 
-def _kept(out: Path) -> str:
+def kept_note(out: Path) -> str:
     """What an interrupted or failed run left for the next one ('' when nothing)."""
     parts = out.with_name(out.name + ".parts")
     n = len(list(parts.glob("*.npz"))) if parts.is_dir() else 0
@@ -132,12 +132,12 @@ def run_resumable(args, out: Path, run) -> None:
     try:
         run()
     except KeyboardInterrupt:
-        args.interrupt_note = _kept(out)
+        args.interrupt_note = kept_note(out)
         raise
     except UrmxError:
         raise  # its message says what is kept
     except Exception:
-        note = _kept(out)
+        note = kept_note(out)
         if note:
             print(f"urmx {args.command}: {note}", file=sys.stderr)
         raise

@@ -196,6 +196,9 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     """
     from obspy import Stream
 
+    from ..errors import path_argument
+
+    path_argument("read", "path", path)
     return Stream([c.trace() for c in read_file(path, format, dt, unit, channel,
                                                 allow_unusual, response=response).samples])
 
@@ -208,7 +211,7 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
     only ObsPy's own formats import ObsPy."""
     from ..errors import path_argument
 
-    path_argument("read", "path", path)
+    path_argument("read_samples", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual).samples
 
 

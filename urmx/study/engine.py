@@ -491,9 +491,6 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     finally:
         bar.close()
     attrs = {**global_attrs(study, started, command), "study_definition": base(study, kind)}
-    return _assemble(cells, sources, records, attrs,
-                     lazy=store is not None)
-    attrs = global_attrs(study, started, command)
     attrs["history"] = merged_history(attrs["history"], earlier)
     return _assemble(cells, sources, records, attrs, lazy=store is not None)
 

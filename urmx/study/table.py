@@ -132,8 +132,11 @@ def to_dataframe(archive: str | os.PathLike | xr.Dataset, where: Any = None):
     """
     import pandas as pd
 
+    from ..errors import path_argument
     from ..reporting import open_archive
 
+    if not isinstance(archive, xr.Dataset):
+        path_argument("to_dataframe", "archive", archive)
     ds = open_archive(archive)
     ds = select(ds, parse_where(where) if isinstance(where, str) or where is None else where)
     dims = cell_dims(ds)

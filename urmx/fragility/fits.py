@@ -13,13 +13,27 @@ so Newton's method with a backtracking line search finds their one maximum, vect
 bootstrap resamples. Without censoring the maximum is the mean and the population (1/n)
 standard deviation of ``ln x``, which the iteration starts from.
 
-Confidence. Each fit carries percentile bootstrap intervals for its median and dispersion
-at `CONFIDENCE` (90 %, two-sided) from `RESAMPLES` resamples drawn with a seeded generator
-(`SEED`): the records are resampled with replacement (capacities), or the records of each
-stripe (stripe counts: binomial resampling of each stripe's collapses). Resamples that
+Confidence. Each fit carries intervals for its median and dispersion at `CONFIDENCE`
+(90 %, two-sided) from `RESAMPLES` bootstrap resamples drawn with a seeded generator
+(`SEED`). Capacity fits use the bias-corrected and accelerated (BCa) bootstrap of Efron
+(1987, "Better bootstrap confidence intervals", JASA 82(397), eqs. 2.3, 6.6; Efron &
+Tibshirani 1993, An Introduction to the Bootstrap, Section 14.3): the percentiles of the
+bootstrap distribution are shifted by the bias correction ``z0 = Phi^-1(share of resamples
+below the estimate)`` and the acceleration ``a`` from the jackknife's skewness (eq. 14.15 of
+Efron & Tibshirani), so an estimator biased low, as the MLE of beta is (its uncensored form
+is the 1/n standard deviation), gets an interval shifted up. The plain percentile interval
+(``interval="percentile"``) covered the true beta of 40 simulated capacities in 83 % of
+sets only (issue 38); the coverage test (``tests/test_fit_coverage.py``) measures the BCa
+intervals' (README, "Collapse fragility"). With groups (``groups=``: records of one
+station or event), whole groups are resampled and the jackknife leaves out one group at
+a time (the cluster bootstrap, Davison & Hinkley 1997, Section 3.8), since two components
+of one station are not independent records. ``unbiased=True`` multiplies the dispersion,
+its resamples and its interval by ``sqrt(n / (n - 1))`` (the 1/(n - 1) variance; exact
+for uncensored capacities, a first-order correction with censoring). Stripe counts keep
+percentile intervals (binomial resampling of each stripe's collapses). Resamples that
 admit no fit (fewer than two distinct uncensored capacities; stripes perfectly separated)
 are left out and counted (``LognormalFit.resamples`` is the number kept). With fewer than
-`MIN_BOOTSTRAP` observations the intervals are NaN.
+`MIN_BOOTSTRAP` observations (or groups) the intervals are NaN.
 
 Refused inputs (an `urmx.errors.InputError` naming the value): an infinite capacity, a NaN
 ``censored`` flag of a capacity that is there, a capacity that is not positive, a count
@@ -62,7 +76,7 @@ class LognormalFit:
     method : str
         ``"capacities"`` or ``"multiple-stripe"``.
     median_ci, dispersion_ci : (float, float)
-        Percentile bootstrap interval at `confidence` (NaN when not computed).
+        Bootstrap interval (BCa, or percentile: `interval`) at `confidence` (NaN when not computed).
         [units of the intensity], [1]
     confidence : float
         Two-sided level of the intervals. [1]
@@ -71,6 +85,10 @@ class LognormalFit:
     im, units : str or None
         The intensity measure and its units, when known (`urmx.fragility.collapse_rate`
         checks a hazard curve's against them).
+    interval : str
+        How the intervals were made: ``"bca"`` or ``"percentile"``.
+    groups : int
+        Number of record groups resampled (0: records resampled one by one).
     """
 
     median: float
@@ -84,6 +102,8 @@ class LognormalFit:
     resamples: int = 0
     im: str | None = None
     units: str | None = None
+    interval: str = "bca"
+    groups: int = 0
 
     def probability(self, intensity) -> np.ndarray:
         """Probability of collapse at `intensity` (>= 0; NaN stays NaN) [units of the
@@ -197,21 +217,90 @@ def _check_bootstrap(confidence, resamples) -> int:
     return int(resamples)
 
 
+def bca_interval(estimate: float, boot, jack, confidence: float = CONFIDENCE
+                 ) -> tuple[float, float]:
+    """The BCa bootstrap interval (Efron 1987, eq. 2.3; Efron & Tibshirani 1993, eqs.
+    14.9-14.15) of a statistic from its `estimate`, its bootstrap replicates `boot` (NaN
+    left out) and its jackknife values `jack` (leave one record, or one group, out).
+
+    ``z0 = Phi^-1((#{boot < estimate} + #{boot == estimate} / 2) / B)``,
+    ``a = sum (m - j_i)^3 / (6 (sum (m - j_i)^2)^1.5)`` with ``m`` the jackknife mean, and
+    the interval is the bootstrap quantiles at ``Phi(z0 + (z0 + z) / (1 - a (z0 + z)))`` for
+    ``z = Phi^-1((1 -+ confidence) / 2)``. NaN when fewer than 2 replicates."""
+    from scipy.stats import norm
+
+    b = np.asarray(boot, dtype=float)
+    b = b[np.isfinite(b)]
+    j = np.asarray(jack, dtype=float)
+    j = j[np.isfinite(j)]
+    if b.size < 2 or not math.isfinite(estimate):
+        return _NAN2
+    share = (np.sum(b < estimate) + 0.5 * np.sum(b == estimate)) / b.size
+    share = min(max(share, 0.5 / b.size), 1.0 - 0.5 / b.size)
+    z0 = float(norm.ppf(share))
+    dev = j.mean() - j if j.size > 2 else np.zeros(1)
+    den = 6.0 * float(np.sum(dev ** 2)) ** 1.5
+    acc = float(np.sum(dev ** 3)) / den if den > 0 else 0.0
+    out = []
+    for alpha in ((1.0 - confidence) / 2.0, (1.0 + confidence) / 2.0):
+        z = z0 + float(norm.ppf(alpha))
+        level = float(norm.cdf(z0 + z / (1.0 - acc * z)))
+        out.append(float(np.quantile(b, min(max(level, 0.0), 1.0))))
+    return out[0], out[1]
+
+
+def _group_codes(groups, keep: np.ndarray, size: int) -> np.ndarray:
+    """Integer group codes of the kept observations (each its own group without `groups`)."""
+    if groups is None:
+        return np.arange(size)
+    g = np.asarray(groups, dtype=object).ravel()
+    if g.size != keep.size:
+        raise InputError(f"groups has {g.size} entries, capacities {keep.size}")
+    return np.unique(g[keep].astype(str), return_inverse=True)[1].ravel()
+
+
+def resample_weights(codes: np.ndarray, resamples: int, rng) -> np.ndarray:
+    """Bootstrap weights (resamples, n) of observations with group `codes`: whole groups
+    drawn with replacement, as many as there are groups."""
+    n_groups = int(codes.max()) + 1 if codes.size else 0
+    counts = rng.multinomial(n_groups, np.full(n_groups, 1.0 / n_groups), size=resamples)
+    return counts[:, codes].astype(float)
+
+
+def jackknife_weights(codes: np.ndarray) -> np.ndarray:
+    """Weights (groups, n) leaving one group out at a time."""
+    n_groups = int(codes.max()) + 1 if codes.size else 0
+    return (codes[None, :] != np.arange(n_groups)[:, None]).astype(float)
+
+
+def _unbiased_factor(n: int, unbiased: bool) -> float:
+    return math.sqrt(n / (n - 1.0)) if unbiased and n > 1 else 1.0
+
+
 def bootstrap_lognormal(capacities, censored=None, resamples: int = RESAMPLES,
-                        seed: int | None = SEED) -> tuple[np.ndarray, np.ndarray]:
+                        seed: int | None = SEED, groups=None, unbiased: bool = False,
+                        jackknife: bool = False):
     """Medians and dispersions of `fit_lognormal` on records resampled with replacement
-    (the same inputs and refusals), NaN where a resample admits no fit.
+    (whole groups when `groups` is given; the same inputs and refusals), NaN where a
+    resample admits no fit.
 
     Returns
     -------
-    (ndarray, ndarray)
-        Shape ``(resamples,)`` each. [units of the intensity], [1]
+    (ndarray, ndarray) or (ndarray, ndarray, ndarray, ndarray)
+        Shape ``(resamples,)`` each [units of the intensity], [1]; with ``jackknife=True``
+        also the leave-one-group-out medians and dispersions (shape ``(groups,)``).
     """
+    raw = np.asarray(capacities, dtype=float).ravel()
     x, cen = _capacities(capacities, censored)
+    codes = _group_codes(groups, ~np.isnan(raw), x.size)
     y = np.log(x)
     rng = np.random.default_rng(seed)
-    w = rng.multinomial(y.size, np.full(y.size, 1.0 / y.size), size=int(resamples))
-    return _lognormal_mle(y, cen, w.astype(float))
+    f = _unbiased_factor(x.size, unbiased)
+    bm, bd = _lognormal_mle(y, cen, resample_weights(codes, int(resamples), rng))
+    if not jackknife:
+        return bm, bd * f
+    jm, jd = _lognormal_mle(y, cen, jackknife_weights(codes))
+    return bm, bd * f, jm, jd * f
 
 
 def _capacities(capacities, censored) -> tuple[np.ndarray, np.ndarray]:
@@ -240,9 +329,10 @@ def _capacities(capacities, censored) -> tuple[np.ndarray, np.ndarray]:
 
 def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
                   resamples: int = RESAMPLES, seed: int | None = SEED,
-                  im: str | None = None, units: str | None = None) -> LognormalFit:
+                  im: str | None = None, units: str | None = None, groups=None,
+                  unbiased: bool = False, interval: str = "bca") -> LognormalFit:
     """Median and dispersion of collapse capacities by maximum likelihood, with censoring,
-    and their bootstrap intervals.
+    and their bootstrap intervals (BCa by default; module docstring).
 
     The likelihood (Baker 2015, truncated IDA) is the product of the lognormal density at
     every observed capacity and the probability of surviving the censoring intensity,
@@ -266,6 +356,12 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
         Seed of the resampling (the same seed gives the same intervals).
     im, units : str, optional
         The intensity measure and its units, kept on the fit.
+    groups : array_like, optional
+        A label per capacity (station or event): the bootstrap resamples whole groups.
+    unbiased : bool
+        Scale the dispersion (and its interval) by ``sqrt(n / (n - 1))``.
+    interval : {"bca", "percentile"}
+        The bootstrap interval.
 
     Returns
     -------
@@ -278,7 +374,11 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
         capacity that is not positive or is infinite, a NaN flag of a capacity.
     """
     resamples = _check_bootstrap(confidence, resamples)
+    if interval not in ("bca", "percentile"):
+        raise InputError(f"interval={interval!r}: use 'bca' or 'percentile'")
+    raw = np.asarray(capacities, dtype=float).ravel()
     x, cen = _capacities(capacities, censored)
+    codes = _group_codes(groups, ~np.isnan(raw), x.size)
     y = np.log(x)
     obs = y[~cen]
     if obs.size < 2 or np.ptp(obs) <= 1e-12 * max(1.0, float(np.max(np.abs(obs)))):
@@ -286,17 +386,25 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
         raise InputError(f"a lognormal fit needs at least two distinct uncensored capacities "
                          f"(got {obs.size} uncensored of {y.size})")
     med, disp = _lognormal_mle(y, cen, np.ones((1, y.size)))
+    f = _unbiased_factor(y.size, unbiased)
+    med, disp = float(med[0]), float(disp[0]) * f
     ci_m, ci_d, kept = _NAN2, _NAN2, 0
-    if resamples and y.size >= MIN_BOOTSTRAP:
+    n_groups = int(codes.max()) + 1
+    if resamples and n_groups >= MIN_BOOTSTRAP:
         rng = np.random.default_rng(seed)
-        w = rng.multinomial(y.size, np.full(y.size, 1.0 / y.size), size=resamples)
-        bm, bd = _lognormal_mle(y, cen, w.astype(float))
+        bm, bd = _lognormal_mle(y, cen, resample_weights(codes, resamples, rng))
+        bd = bd * f
         ok = np.isfinite(bm)
         kept = int(ok.sum())
-        if kept:
+        if kept and interval == "percentile":
             ci_m, ci_d = _interval(bm[ok], confidence), _interval(bd[ok], confidence)
-    return LognormalFit(float(med[0]), float(disp[0]), int(y.size), int(cen.sum()),
-                        "capacities", ci_m, ci_d, float(confidence), kept, im, units)
+        elif kept:
+            jm, jd = _lognormal_mle(y, cen, jackknife_weights(codes))
+            ci_m = bca_interval(med, bm[ok], jm, confidence)
+            ci_d = bca_interval(disp, bd[ok], jd * f, confidence)
+    return LognormalFit(med, disp, int(y.size), int(cen.sum()), "capacities", ci_m, ci_d,
+                        float(confidence), kept, im, units, interval,
+                        n_groups if groups is not None else 0)
 
 
 # ---- multiple stripes -------------------------------------------------------------------------
@@ -434,7 +542,7 @@ def fit_multiple_stripe(intensity, analyses, collapses, *, confidence: float = C
         if kept:
             ci_m, ci_d = _interval(bm[ok], confidence), _interval(bd[ok], confidence)
     return LognormalFit(float(med[0]), float(disp[0]), int(n.sum()), 0, "multiple-stripe",
-                        ci_m, ci_d, float(confidence), kept, im, units)
+                        ci_m, ci_d, float(confidence), kept, im, units, "percentile")
 
 
 def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]:

@@ -243,6 +243,9 @@ def _preamble(rep: _Report, notes: list[str]) -> list[str]:
                      str(ds.attrs.get("history", "")).splitlines()[-1:][0]
                      if ds.attrs.get("history") else ""])
     lines += table(["study", "dimensions", "history (last line)"], rows) + [""]
+    from .reporting import made_from
+
+    lines += [f"- `{study_kind(ds)}`: " + made_from(ds) for ds in rep.studies.values()] + [""]
     for label, kind in KINDS.items():
         if kind not in rep.studies:
             notes.append(f"no {label} archive was given: its figures and tables are missing")

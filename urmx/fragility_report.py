@@ -276,8 +276,9 @@ def _curves(ds: xr.Dataset, d: xr.Dataset, out: Path) -> list[str]:
     return lines + ["", "## Fragility curves per diaphragm", "",
                     "Lognormal fits per wall (lines) with their 90 % bootstrap bands "
                     "(shaded: the pointwise 5-95 % range of the probability over the "
-                    "records resampled) and the records' capacities (dots, plotted at "
-                    "(i - 0.5)/n; censored records are not dotted).", "",
+                    "records resampled, whole stations where the records carry a group) "
+                    "and the records' capacities (dots, plotted at (i - 0.5)/n; censored "
+                    "records are not dotted).", "",
                     _save(P.plot_fragility_curves(ds), out, "fragility_curves.png"), ""]
 
 

@@ -187,8 +187,9 @@ def measure(name: str, where: str = "hazard curve") -> str:
             period = math.nan
         if math.isfinite(period) and period > 0:
             return f"sa({period:g})"
-    raise InputError(f"{where}: {name!r} is not an intensity measure ({', '.join(RECORD_IMS)}"
-                     ", or sa(T) with the period T in s)")
+    raise InputError(f"{where}: the first column must be an intensity measure "
+                     f"({', '.join(RECORD_IMS)}, or sa(T) with the period T in s); got "
+                     f"{name!r}")
 
 
 def measure_units(im: str) -> str:

@@ -69,7 +69,7 @@ def made_from(ds: xr.Dataset, name: str = "archive") -> str:
 
     commit = str(ds.attrs.get("urmx_git_commit", "none"))
     kernel = str(ds.attrs.get("kernel_source_hash", "unknown"))
-    code = ("no git commit recorded" if commit in ("none", "") else
+    code = ("an unrecorded commit" if commit in ("none", "") else
             f"commit `{commit[:12]}`" + (" with local changes"
                                          if ds.attrs.get("urmx_git_dirty") == 1 else ""))
     if kernel == "unknown":

@@ -265,6 +265,14 @@ def _rate(v: float) -> str:
     return "-" if not np.isfinite(v) else f"{v:.2g}"
 
 
+def _rate_ci(v: float, lo: float, hi: float) -> str:
+    """A rate with its interval in brackets (none when there is no interval: too few
+    records or groups to resample)."""
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return _rate(v)
+    return f"{_rate(v)} [{_rate(lo)}-{_rate(hi)}]"
+
+
 def risk_findings(r: dict | None) -> list[str]:
     """Findings bullets: the range of the rates and the change when stiffening."""
     if r is None:
@@ -315,8 +323,8 @@ def risk_lines(ds: xr.Dataset, r: dict, heading: str = "###") -> list[str]:
     lines = []
     for g, labels in FA.supports_groups(d).items():
         rows = [[str(w), f"{float(d.slenderness.sel(wall=w)):.0f}"] + [
-            f"{_rate(float(c.rate))} [{_rate(float(c.rate_lower))}-"
-            f"{_rate(float(c.rate_upper))}], {100 * float(c.probability):.2g} %"
+            f"{_rate_ci(float(c.rate), float(c.rate_lower), float(c.rate_upper))}, "
+            f"{100 * float(c.probability):.2g} %"
             for c in (risk.sel(wall=w, diaphragm=lab) for lab in labels)]
             for w in d.wall.values]
         lines += [f"{heading} {GROUPS.get(g, g).capitalize()}", "",
@@ -496,11 +504,10 @@ def im_comparison_lines(c: xr.Dataset | None) -> list[str]:
         for w in c.wall.values:
             e = c.sel(wall=w, diaphragm=lab)
             rows.append([lab, str(w),
-                         f"{_rate(float(e.pga_rate))} [{_rate(float(e.pga_lower))}-"
-                         f"{_rate(float(e.pga_upper))}]",
+                         _rate_ci(float(e.pga_rate), float(e.pga_lower), float(e.pga_upper)),
                          f"{100 * float(e.pga_extrapolated):.0f} %",
-                         f"{_rate(float(e.avg_rate))} [{_rate(float(e.avg_rate_lower))}-"
-                         f"{_rate(float(e.avg_rate_upper))}]",
+                         _rate_ci(float(e.avg_rate), float(e.avg_rate_lower),
+                                  float(e.avg_rate_upper)),
                          f"{100 * float(e.avg_extrapolated_share):.0f} %",
                          _fmt(float(e.ratio), 2), _fmt(float(e.shape), 2),
                          _fmt(float(e.spread), 2)])

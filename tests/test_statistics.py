@@ -332,3 +332,27 @@ def test_variance_shares_of_a_linear_model_and_their_rank_fallback():
     z = np.exp(12 * x[:, 0]) + 0.05 * np.exp(12 * x[:, 1])
     rz = variance_shares(x, z)
     assert rz["r2"] < 0.7 and rz["ranks"] and rz["r2_ranks"] > rz["r2"]
+
+
+def test_capacities_in_sa_at_a_period_come_from_the_records(fake_records,  # noqa: F811
+                                                            make_study):
+    """sa(T): the scale factor at collapse times the record's 5 %-damped Sa at T as
+    analysed (its scale factor: 2 on "shake"); a measure urmx cannot compute is refused."""
+    from urmx.records.measures import pseudo_spectral_acceleration
+
+    from .test_fragility import ACC
+
+    ds = _run(make_study, REP_IDA, "rep.toml", kernel=stiff_kernel)
+    cap = FA.capacities(ds, "sa(0.30)")
+    for rid in ACC:
+        acc = ACC[rid] * (2.0 if rid == "shake" else 1.0)
+        unit = float(pseudo_spectral_acceleration(acc, 0.01, np.array([0.3]), 0.05)[0])
+        np.testing.assert_allclose(cap.sel(record=rid), ds.collapse_scale.sel(record=rid)
+                                   * unit, rtol=1e-12)
+    assert cap.attrs["units"] == "m s-2"
+
+
+def test_urmx_risk_needs_an_archive_or_a_whole_fragility(capsys):
+    assert main(["risk", "--hazard", str(OQ), "--median", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--median, --dispersion and --im" in err

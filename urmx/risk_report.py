@@ -379,10 +379,15 @@ def deaggregation_lines(d: xr.Dataset, r: dict, heading: str = "###") -> list[st
             "P(collapse | x) |d lambda(x)| over the band, `urmx.fragility.risk.deaggregate`) "
             "and from beyond the last computed intensity: "
             f"{_computed_text(curve, f, unit)}. That extrapolated share runs from "
-            f"{100 * float(ext.min()):.2g} % to {100 * float(ext.max()):.2g} % (median "
-            f"{100 * float(ext.median()):.2g} %): where it is large the rate rests on the "
+            f"{_share(float(ext.min()))} % to {_share(float(ext.max()))} % (median "
+            f"{_share(float(ext.median()))} %): where it is large the rate rests on the "
             "extension of the curve, not on the hazard the file computes.", "",
             *table(head, rows), ""]
+
+
+def _share(v: float) -> str:
+    """A share in percent: two significant digits below 10 %, whole percents above."""
+    return f"{100 * v:.2g}" if 100 * v < 10 else f"{100 * v:.0f}"
 
 
 def _period(p: float) -> str:

@@ -578,9 +578,16 @@ def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records
     spr, sens = UA.spread(ds), UA.sensitivity(ds)
     beta = spr.total_dispersion.values
     assert f"the dispersion is {beta.min():.2g} to {beta.max():.2g}" in text
-    top = UA.strongest(sens)
-    first = max(set(top.values.ravel()), key=lambda p: int((top == p).sum()))
-    assert f"is `{first}`'s in {int((top == first).sum())} of 4 wall" in text
+    # R^2, the variance shares and PRCC side by side (issue 38), the ranking by share where
+    # the linear model explains enough
+    assert "### Variance shares beside PRCC" in text
+    c = sens.isel(wall=0, diaphragm=0)
+    p0 = str(sens.parameter.values[0])
+    assert (f"{100 * float(c.share.sel(parameter=p0)):.0f} % "
+            f"[{100 * float(c.share_low.sel(parameter=p0)):.0f}-") in text
+    linear = int((sens.r2 >= 0.7).sum())
+    assert f"in {linear} of 4 wall and diaphragm cells R^2 >= 0.7" in text
+    assert np.all((sens.r2 > 0) & (sens.r2 <= 1))
     eff = UA.law_effect(ds)
     assert np.all(np.isfinite(eff)) and f"{float(eff.min()):.3g} to" in text
     assert sens.prcc.dims == ("wall", "diaphragm", "parameter") and np.all(np.isfinite(

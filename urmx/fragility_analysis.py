@@ -13,7 +13,6 @@ import numpy as np
 import xarray as xr
 
 from .analysis import spearman
-from .fragility.fits import CONFIDENCE
 
 GROUPS = {"top": "single storey (diaphragm on top, ground below)",
           "both": "higher storey (between two diaphragms alike)"}
@@ -137,12 +136,49 @@ def require_measures(ds: xr.Dataset) -> None:
                          "urmx): run the study again with `urmx ida` to write them")
 
 
-def capacities(ds: xr.Dataset, im: str) -> xr.DataArray:
+def record_groups(ds: xr.Dataset, records_dir=None) -> np.ndarray | None:
+    """The group (station or event) of each record of an archive: its ``group`` coordinate
+    when it has one, else the record manifest's ``group`` field (a record without one is a
+    group of its own); None when no record has a group (records then resample one by one)."""
+    ids = [str(r) for r in ds.record.values]
+    if "group" in ds.coords:
+        return np.array([str(g) for g in ds.group.values], dtype=object)
+    from . import records as rec
+    from .errors import UrmxError
+
+    try:
+        man = rec.manifest(records_dir)
+    except (UrmxError, OSError):
+        return None
+    groups = [man.get(r, {}).get("group") for r in ids]
+    if all(g is None for g in groups):
+        return None
+    return np.array([g if g is not None else f"record {r}" for g, r in zip(groups, ids,
+                                                                          strict=True)],
+                    dtype=object)
+
+
+def grouping_sentence(groups) -> str:
+    """How the bootstraps resample: ``"whole stations (20 groups of the manifest's `group`)"``
+    or ``"records one by one"``."""
+    if groups is None:
+        return "the records one by one (no record carries a `group`)"
+    n = len(set(groups))
+    return (f"whole groups of records ({n} groups of {len(groups)} records, the record "
+            "manifest's `group`: for the FEMA P695 set its 20 stations of two components "
+            "each), not records one by one")
+
+
+def capacities(ds: xr.Dataset, im: str, records_dir=None) -> xr.DataArray:
     """Collapse capacities in measure `im`: the scale factor at collapse times each
-    record's intensity in `im` (no new analyses), with the units and name of the measure."""
+    record's intensity in `im` (no new analyses), with the units and name of the measure.
+    ``sa(T)`` (Sa at a fixed period, `urmx.fragility.risk.measure`) is computed from the
+    records, read again from `records_dir`."""
     from .fragility import IM_ATTRS
 
     require_measures(ds)
+    if im.startswith("sa("):
+        return _capacities_at_period(ds, im, records_dir)
     if im not in MEASURES:
         from .errors import InputError
 
@@ -153,10 +189,35 @@ def capacities(ds: xr.Dataset, im: str) -> xr.DataArray:
                                                      long_name=f"collapse intensity ({name})")
 
 
-def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None) -> xr.Dataset:
-    """Lognormal fits (with bootstrap intervals) of the capacities in `im` per (wall,
-    diaphragm) at the first COR: ``median_collapse_intensity``, ``dispersion`` and their
-    ``_lower`` / ``_upper`` bounds. [units of `im`], [1]"""
+def _capacities_at_period(ds: xr.Dataset, im: str, records_dir=None) -> xr.DataArray:
+    """Capacities in ``sa(T)``: the scale factor at collapse times each record's 5 %-damped
+    Sa at T (as analysed: times its scale factor), the records read again."""
+    from .errors import InputError, UrmxError
+    from .fragility.intensity import DAMPING
+    from .fragility.risk import measure
+    from .records.measures import pseudo_spectral_acceleration
+    from .records.record import as_record
+
+    period = float(measure(im)[3:-1])
+    try:
+        recs = [as_record(str(r), records_dir) for r in ds.record.values]
+    except (UrmxError, OSError) as exc:
+        raise InputError(f"capacities in {im} need the records' spectra and the records "
+                         f"cannot be read ({exc}); set URMX_RECORDS") from None
+    sa = np.array([float(pseudo_spectral_acceleration(r.acceleration * float(sf), r.dt,
+                                                      np.array([period]), DAMPING)[0])
+                   for r, sf in zip(recs, ds.scale_factor.values, strict=True)])
+    unit = xr.DataArray(sa, dims="record", coords={"record": ds.record})
+    return (ds.collapse_scale * unit).rename("collapse_sa").assign_attrs(
+        units="m s-2", long_name=f"collapse intensity (Sa({period:g} s), 5 % damped)")
+
+
+def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None,
+            groups=None) -> xr.Dataset:
+    """Lognormal fits (with studentized bootstrap intervals, whole `groups` of records
+    resampled when given: `record_groups`) of the capacities in `im` per (wall, diaphragm)
+    at the first COR: ``median_collapse_intensity``, ``dispersion`` and their ``_lower`` /
+    ``_upper`` bounds. [units of `im`], [1]"""
     from .fragility import RESAMPLES, fit_lognormal
 
     d = first_cor(ds)
@@ -170,7 +231,8 @@ def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None) -> xr.Dataset
         ran = np.isfinite(cap[iw, idp])
         try:
             f = fit_lognormal(cap[iw, idp, ran], cen[iw, idp, ran],
-                              resamples=RESAMPLES if resamples is None else resamples)
+                              resamples=RESAMPLES if resamples is None else resamples,
+                              groups=None if groups is None else np.asarray(groups)[ran])
         except ValueError:
             continue
         for n, v in zip(names, (f.median, *f.median_ci, f.dispersion, *f.dispersion_ci),
@@ -180,11 +242,11 @@ def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None) -> xr.Dataset
                       coords={"wall": d.wall, "diaphragm": d.diaphragm})
 
 
-def efficiency(ds: xr.Dataset) -> xr.Dataset:
+def efficiency(ds: xr.Dataset, groups=None) -> xr.Dataset:
     """The dispersion of the capacities in every measure (`MEASURES`) per (wall,
     diaphragm) with its bootstrap interval, and per diaphragm the measure with the lowest
     median dispersion over the walls (``best``): one IDA run, no new analyses."""
-    fits = xr.concat([fits_in(ds, im) for im in MEASURES], dim="measure")
+    fits = xr.concat([fits_in(ds, im, groups=groups) for im in MEASURES], dim="measure")
     fits = fits.assign_coords(measure=list(MEASURES))
     typical = fits.dispersion.median("wall")
     best = typical.idxmin("measure")
@@ -224,13 +286,51 @@ def record_magnitude_distance(ds: xr.Dataset, records_dir=None) -> tuple[np.ndar
     return mag, dist
 
 
-def sufficiency(ds: xr.Dataset, magnitude, distance) -> xr.Dataset:
+def _slopes(x: np.ndarray, y: np.ndarray, w: np.ndarray, onehot: np.ndarray):
+    """Weighted least-squares slopes of rows of weights `w` (B, n) and their cluster-robust
+    standard errors (scores summed over each group of `onehot` (n, G), a group counted as
+    often as it is drawn)."""
+    sw = w.sum(1, keepdims=True)
+    xc = x[None, :] - (w @ x)[:, None] / sw
+    yc = y[None, :] - (w @ y)[:, None] / sw
+    sxx = np.sum(w * xc * xc, 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        slope = np.sum(w * xc * yc, 1) / sxx
+        score = (xc * (yc - slope[:, None] * xc)) @ onehot
+        count = (w @ onehot) / onehot.sum(0)
+        se = np.sqrt(np.sum(count * score * score, 1)) / sxx
+    return slope, se
+
+
+def group_slope_p(x: np.ndarray, y: np.ndarray, groups, resamples: int = 1000,
+                  seed: int = 0) -> float:
+    """Two-sided p-value of a least-squares slope of `y` on `x` by the cluster bootstrap-t
+    (whole groups resampled, each resample's slope studentized by its cluster-robust
+    standard error; Cameron, Gelbach & Miller 2008, Rev. Econ. Stat. 90(3), Section
+    III.B): the share of resamples with ``|b* - b| / se* >= |b| / se``."""
+    from .fragility.fits import resample_weights
+
+    codes = np.unique(np.asarray(groups, dtype=str), return_inverse=True)[1].ravel()
+    onehot = (codes[:, None] == np.arange(int(codes.max()) + 1)[None, :]).astype(float)
+    b0, se0 = _slopes(x, y, np.ones((1, x.size)), onehot)
+    w = resample_weights(codes, resamples, np.random.default_rng(seed))
+    b, se = _slopes(x, y, w, onehot)
+    ok = np.isfinite(b) & np.isfinite(se) & (se > 0)
+    if not ok.any() or not (np.isfinite(se0[0]) and se0[0] > 0):
+        return math.nan
+    t0 = abs(b0[0]) / se0[0]
+    return float(max(np.mean(np.abs(b[ok] - b0[0]) / se[ok] >= t0), 1.0 / resamples))
+
+
+def sufficiency(ds: xr.Dataset, magnitude, distance, groups=None) -> xr.Dataset:
     """Is a measure sufficient (Luco & Cornell 2007, Earthquake Spectra 23(2))? Per measure,
     wall and diaphragm (first COR), the least-squares slope of the residuals
     ``ln(capacity) - mean`` over the uncensored records on the records' magnitude and on
     ``ln(distance)``, with its two-sided p-value (``slope_magnitude``, ``p_magnitude``,
     ``slope_distance``, ``p_distance``). A measure is sufficient when the residuals do not
-    depend on them (large p-values)."""
+    depend on them (large p-values). With `groups` (`record_groups`: the two components of
+    a station share its magnitude and distance) the p-value is the cluster bootstrap's
+    (`group_slope_p`), not the t-test's, which would count 20 stations as 40 records."""
     from scipy.stats import linregress
 
     d = first_cor(ds)
@@ -248,50 +348,71 @@ def sufficiency(ds: xr.Dataset, magnitude, distance) -> xr.Dataset:
                 res = lc[iw, idp, ok] - lc[iw, idp, ok].mean()
                 fit = linregress(x[ok], res)
                 out[s_name][k, iw, idp], out[p_name][k, iw, idp] = fit.slope, fit.pvalue
+                if groups is not None:
+                    out[p_name][k, iw, idp] = group_slope_p(x[ok], res,
+                                                            np.asarray(groups)[ok])
     dims = ("measure", "wall", "diaphragm")
     return xr.Dataset({n: (dims, v) for n, v in out.items()},
                       coords={"measure": list(MEASURES), "wall": d.wall,
-                              "diaphragm": d.diaphragm})
+                              "diaphragm": d.diaphragm}).assign_attrs(
+        grouped=int(groups is not None))
 
 
 def collapse_risk(ds: xr.Dataset, hazard, years: float = 50.0,
-                  resamples: int | None = None) -> xr.Dataset:
-    """Mean annual frequency (``rate`` [1/yr], with bootstrap bounds ``rate_lower`` /
-    ``rate_upper``) and probability in `years` (``probability``) of collapse per (wall,
-    diaphragm) at the first COR, from the fits in the hazard curve's measure
-    (`urmx.fragility.collapse_rate`; no new analyses), with the share of each rate from
-    beyond the curve (``tail_share``)."""
-    from .fragility import RESAMPLES, bootstrap_lognormal, collapse_rate, read_hazard
-    from .fragility.risk import HazardCurve, rates
+                  resamples: int | None = None, groups=None, records_dir=None) -> xr.Dataset:
+    """Mean annual frequency (``rate`` [1/yr], with its studentized bootstrap bounds
+    ``rate_lower`` / ``rate_upper``, whole `groups` of records resampled when given) and
+    probability in `years` (``probability``) of collapse per (wall, diaphragm) at the first
+    COR, from the fits in the hazard curve's measure (`urmx.fragility.collapse_rate`; no
+    new analyses), with the share of each rate from capacities beyond the curve
+    (``tail_share``), from ground motions beyond the intensities the file marks as computed
+    (``extrapolated_share``) and from each band of return periods (``band_share``, with
+    the bands' intensities ``band_low`` / ``band_high``)."""
+    from .fragility import RESAMPLES, collapse_rate, read_hazard
+    from .fragility.fits import function_interval
+    from .fragility.risk import BAND_PERIODS, HazardCurve, rates
 
     curve = hazard if isinstance(hazard, HazardCurve) else read_hazard(hazard)
-    fits = fits_in(ds, curve.im, resamples=0)
     d = first_cor(ds)
-    cap = capacities(d, curve.im).transpose("wall", "diaphragm", "record").values
+    cap = capacities(d, curve.im, records_dir).transpose("wall", "diaphragm", "record").values
     cen = d.censored.transpose("wall", "diaphragm", "record").values
-    names = ("rate", "probability", "tail_share", "rate_lower", "rate_upper")
+    names = ("rate", "probability", "tail_share", "rate_lower", "rate_upper",
+             "extrapolated_share", "median_collapse_intensity", "dispersion")
     out = {n: np.full(cap.shape[:2], np.nan) for n in names}
+    nb = len(BAND_PERIODS) + 1
+    band = {n: np.full(cap.shape[:2] + (nb,), np.nan) for n in ("band_low", "band_high",
+                                                                 "band_share")}
+    from .fragility import fit_lognormal
+
     for iw, idp in np.ndindex(cap.shape[:2]):
-        med = float(fits.median_collapse_intensity[iw, idp])
-        beta = float(fits.dispersion[iw, idp])
-        if not np.isfinite(med):
+        ran = np.isfinite(cap[iw, idp])
+        grp = None if groups is None else np.asarray(groups)[ran]
+        try:
+            fit = fit_lognormal(cap[iw, idp, ran], cen[iw, idp, ran], resamples=0)
+        except ValueError:
             continue
-        r = collapse_rate(_Fit(med, beta, curve.im, curve.units), curve, years)
+        r = collapse_rate(_Fit(fit.median, fit.dispersion, curve.im, curve.units), curve,
+                          years)
+        out["median_collapse_intensity"][iw, idp] = fit.median
+        out["dispersion"][iw, idp] = fit.dispersion
         out["rate"][iw, idp], out["probability"][iw, idp] = r.rate, r.probability
         out["tail_share"][iw, idp] = r.tail_share
-        ran = np.isfinite(cap[iw, idp])
-        bm, bd = bootstrap_lognormal(cap[iw, idp, ran], cen[iw, idp, ran],
-                                     RESAMPLES if resamples is None else resamples)
-        ok = np.isfinite(bm)
-        if ok.sum():
-            lam, _ = rates(curve, bm[ok], bd[ok], points=801)
-            out["rate_lower"][iw, idp], out["rate_upper"][iw, idp] = np.quantile(
-                lam, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
+        out["extrapolated_share"][iw, idp] = r.extrapolated_share
+        for k, (lo, hi, share) in enumerate(r.bands):
+            band["band_low"][iw, idp, k], band["band_high"][iw, idp, k] = lo, hi
+            band["band_share"][iw, idp, k] = share
+        out["rate_lower"][iw, idp], out["rate_upper"][iw, idp] = function_interval(
+            cap[iw, idp, ran], cen[iw, idp, ran],
+            lambda m, b: rates(curve, m, b, points=801)[0], groups=grp,
+            resamples=RESAMPLES if resamples is None else resamples)
     res = xr.Dataset({n: (("wall", "diaphragm"), v) for n, v in out.items()},
                      coords={"wall": d.wall, "diaphragm": d.diaphragm})
-    return res.assign(median_collapse_intensity=fits.median_collapse_intensity,
-                      dispersion=fits.dispersion).assign_attrs(
-        im=curve.im, units=curve.units, hazard=curve.source, years=float(years))
+    for n, v in band.items():
+        res[n] = (("wall", "diaphragm", "band"), v)
+    return res.assign_attrs(im=curve.im, units=curve.units, hazard=curve.source,
+                            years=float(years), grouped=int(groups is not None),
+                            computed_to=np.nan if curve.computed_to is None
+                            else curve.computed_to)
 
 
 class _Fit:

@@ -347,9 +347,10 @@ def plot_ida_curves(ds: xr.Dataset, diaphragm: str, axes=None) -> list:
     return axes
 
 
-def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray) -> tuple | None:
+def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray, groups=None) -> tuple | None:
     """Pointwise 5-95 % range of the fitted probability at `x` over the bootstrap
-    resamples of the records (`urmx.fragility.bootstrap_lognormal`), or None."""
+    resamples of the records (whole `groups` of them when given;
+    `urmx.fragility.bootstrap_lognormal`), or None."""
     from scipy.special import ndtr
 
     from .fragility import CONFIDENCE, bootstrap_lognormal
@@ -358,7 +359,8 @@ def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray) -> tuple | None:
     if ran.sum() < 5:
         return None
     try:
-        med, beta = bootstrap_lognormal(cap[ran], cen[ran], resamples=200)
+        med, beta = bootstrap_lognormal(cap[ran], cen[ran], resamples=200,
+                                        groups=None if groups is None else groups[ran])
     except ValueError:
         return None
     ok = np.isfinite(med)
@@ -371,10 +373,14 @@ def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray) -> tuple | None:
 
 def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
     """Fitted collapse fragility of each wall (colour by slenderness) with its bootstrap
-    band (shaded: the pointwise 90 % range over 200 resamples of the records), one panel
-    per diaphragm, with the records' capacities as empirical distributions (dots)."""
+    band (shaded: the pointwise 90 % range over 200 resamples of the records, whole
+    groups of them where the records have groups: `urmx.fragility_analysis.record_groups`),
+    one panel per diaphragm, with the records' capacities as empirical distributions
+    (dots)."""
     from scipy.stats import norm
 
+    groups = FA.record_groups(ds) if band else None
+    groups = None if groups is None else np.asarray(groups)
     f, unit = _im_scale(ds)
     d = FA.first_cor(ds)
     labels = [str(x) for x in d.diaphragm.values]
@@ -392,7 +398,7 @@ def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
             if np.isfinite(med):
                 ax.plot(x, norm.cdf(np.log(x / med) / beta), color=col, lw=1.2,
                         label=f"{w}")
-                b = _band(c.collapse_intensity.values * f, c.censored.values, x) \
+                b = _band(c.collapse_intensity.values * f, c.censored.values, x, groups) \
                     if band else None
                 if b is not None:
                     ax.fill_between(x, b[0], b[1], color=col, alpha=0.18, lw=0)

@@ -132,3 +132,26 @@ def interval(estimate: float, lo: float, hi: float, fmt) -> str:
 DEGENERATE_NOTE = (f"{DEGENERATE}: a bound of this interval equals its estimate: the "
                    "resamples of the records cannot move it (too few distinct records), so "
                    "it is no confidence interval.")
+
+
+def made_from(ds: xr.Dataset, name: str = "archive") -> str:
+    """One sentence naming the code an archive was made with (its ``urmx_git_commit``,
+    local changes, ``kernel_source_hash``: `urmx.provenance.attrs`) and whether that kernel
+    differs from the one running now (`urmx.jitcache.SOURCE_HASH`): a report made from an
+    archive of an older kernel says so."""
+    from .jitcache import SOURCE_HASH
+
+    commit = str(ds.attrs.get("urmx_git_commit", "none"))
+    kernel = str(ds.attrs.get("kernel_source_hash", "unknown"))
+    code = ("an unrecorded commit" if commit in ("none", "") else
+            f"commit `{commit[:12]}`" + (" with local changes"
+                                         if ds.attrs.get("urmx_git_dirty") == 1 else ""))
+    if kernel == "unknown":
+        same = ("it does not record its kernel source hash, so whether the current kernel "
+                f"(`{SOURCE_HASH[:16]}`) would give the same numbers is not known")
+    elif kernel[:16] == SOURCE_HASH[:16]:
+        same = "the current kernel is the same"
+    else:
+        same = (f"**the current kernel differs** (`{SOURCE_HASH[:16]}`): run the study again "
+                "for numbers of the current kernel")
+    return (f"The {name} was made at {code}, kernel source hash `{kernel[:16]}`; {same}.")

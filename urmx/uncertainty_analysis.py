@@ -19,7 +19,14 @@ import xarray as xr
 from . import fragility_analysis as FA
 from .errors import InputError
 from .reporting import open_archive
-from .uncertainty import coordinate_name, prcc, sobol_indices, variance_split
+from .uncertainty import (
+    R2_THRESHOLD,
+    coordinate_name,
+    prcc,
+    sobol_indices,
+    variance_shares,
+    variance_split,
+)
 
 LAWS = ("scale", "contact")  # the impact laws, in the order shown
 
@@ -58,20 +65,45 @@ def output(ds: xr.Dataset) -> xr.DataArray:
     return y
 
 
+def design_values(ds: xr.Dataset) -> np.ndarray:
+    """The sampled values, (sample, parameter): a number as drawn, a ``choice`` as the index
+    of its value among the sorted values (0/1 for two)."""
+    cols = []
+    for name in [str(p) for p in ds.parameter.values]:
+        v = sampled(ds, name).values
+        if v.dtype.kind in "OUS":
+            levels = sorted({str(x) for x in v})
+            v = np.array([levels.index(str(x)) for x in v], dtype=float)
+        cols.append(np.asarray(v, dtype=float))
+    return np.stack(cols, axis=1)
+
+
 def sensitivity(ds: xr.Dataset, seed: int = 0) -> xr.Dataset:
     """The sensitivity of :func:`output` to each sampled parameter, per wall and diaphragm:
     partial rank correlations with their 95 % interval (``prcc``, ``prcc_low``,
-    ``prcc_high``) and the Sobol' indices with the half widths of their 95 % intervals
+    ``prcc_high``), the Sobol' indices with the half widths of their 95 % intervals
     (``s1``, ``s1_conf``, ``st``, ``st_conf``; ``st`` only from a ``saltelli`` design),
-    all on the design's points (`urmx.uncertainty.sensitivity`)."""
+    all on the design's points (`urmx.uncertainty.sensitivity`), and the linear model's
+    ``r2`` (``r2_ranks`` of the ranks', ``ranks`` 1 where that one is used) with the
+    variance shares (``share``, ``share_low``, ``share_high``, ``rank_held``) on the
+    sampled values (`urmx.uncertainty.variance_shares`)."""
     y = output(ds).transpose("wall", "diaphragm", "sample")
     unit = ds.sample_unit.transpose("sample", "parameter").values
     method = ds.attrs.get("sampling_method", "lhs")
     names = ("prcc", "prcc_low", "prcc_high", "s1", "s1_conf", "st", "st_conf")
     shape = (ds.wall.size, ds.diaphragm.size, ds.parameter.size)
     out = {k: np.full(shape, np.nan) for k in names}
+    values = design_values(ds)
+    lin = {k: np.full(shape[:2], np.nan) for k in ("r2", "r2_ranks", "ranks")}
+    shares = {k: np.full(shape, np.nan) for k in ("share", "share_low", "share_high",
+                                                   "rank_held")}
     for iw, idp in np.ndindex(*shape[:2]):
         v = y.values[iw, idp]
+        vs = variance_shares(values, v, seed=seed)
+        for k in lin:
+            lin[k][iw, idp] = float(vs[k])
+        for k in shares:
+            shares[k][iw, idp] = vs[k]
         r = prcc(unit, v)
         out["prcc"][iw, idp], out["prcc_low"][iw, idp] = r["prcc"], r["low"]
         out["prcc_high"][iw, idp] = r["high"]
@@ -80,9 +112,19 @@ def sensitivity(ds: xr.Dataset, seed: int = 0) -> xr.Dataset:
             for k in ("s1", "s1_conf", "st", "st_conf"):
                 out[k][iw, idp] = si[k.upper().replace("_CONF", "_conf")]
     dims = ("wall", "diaphragm", "parameter")
-    return xr.Dataset({k: (dims, v) for k, v in out.items()},
-                      coords={"wall": ds.wall.values, "diaphragm": ds.diaphragm.values,
-                              "parameter": ds.parameter.values})
+    res = xr.Dataset({k: (dims, v) for k, v in {**out, **shares}.items()},
+                     coords={"wall": ds.wall.values, "diaphragm": ds.diaphragm.values,
+                             "parameter": ds.parameter.values})
+    for k, v in lin.items():
+        res[k] = (("wall", "diaphragm"), v)
+    return res.assign_attrs(r2_threshold=R2_THRESHOLD)
+
+
+def importance(sens: xr.Dataset) -> xr.DataArray:
+    """Per wall and diaphragm, the measure that ranks the parameters: ``"share"`` (the
+    variance shares) where the linear model's R^2 reaches `R2_THRESHOLD`, else ``"prcc"``
+    (|PRCC|)."""
+    return xr.where(sens.r2 >= sens.attrs.get("r2_threshold", R2_THRESHOLD), "share", "prcc")
 
 
 def strongest(sens: xr.Dataset, by: str = "prcc") -> xr.DataArray:

@@ -33,7 +33,7 @@ from . import plot as P
 from . import uncertainty_analysis as UA
 from .markdown import number as _fmt
 from .markdown import table
-from .reporting import history_line, save_figure
+from .reporting import history_line, made_from, save_figure
 from .uncertainty.sampler import PARAMETERS
 
 MIN_SOBOL = 32  # fewer samples than this: the first-order indices are not shown
@@ -112,6 +112,8 @@ def _header(ds: xr.Dataset) -> list[str]:
         f"the archive of study `{ds.attrs.get('study_name', '?')}` "
         f"({history_line(ds)}{_code(ds)}); do not edit by hand.",
         "",
+        made_from(ds),
+        "",
         f"Grid: {ds.wall.size} walls x {ds.diaphragm.size} diaphragms x {ds.record.size} "
         f"records x {ds.sample.size} samples ({ds.attrs.get('sampling_method')} design, seed "
         f"{ds.attrs.get('sampling_seed')}). Each sample is a wall whose sampled parameters "
@@ -143,19 +145,7 @@ def _header(ds: xr.Dataset) -> list[str]:
 def _findings(ds: xr.Dataset, sens: xr.Dataset, spr: xr.Dataset,
               found: dict | None) -> list[str]:
     """The answers in numbers (computed, so they stay true when regenerated)."""
-    top = UA.strongest(sens)
-    counts = {p: int((top == p).sum()) for p in sens.parameter.values}
-    order = sorted(counts, key=lambda p: -counts[p])
-    mag = np.abs(sens.prcc).median(["wall", "diaphragm"])
-    lines = ["## Findings", "",
-             f"- **Which parameter matters most.** The largest partial rank correlation with "
-             f"the output is `{order[0]}`'s in {counts[order[0]]} of {top.size} wall and "
-             "diaphragm cells" + "".join(f", `{p}`'s in {counts[p]}" for p in order[1:]
-                                         if counts[p]) +
-             "; the median |PRCC| over the cells: " + ", ".join(
-                 f"`{p}` {_fmt(float(mag.sel(parameter=p)), 2)}" for p in
-                 sorted(mag.parameter.values, key=lambda p: -float(mag.sel(parameter=p))))
-             + "."]
+    lines = ["## Findings", "", *_importance_findings(sens)]
     if found is not None:
         lines += _spread_findings(ds, spr) + _law_findings(ds, found)
     else:
@@ -163,6 +153,73 @@ def _findings(ds: xr.Dataset, sens: xr.Dataset, spr: xr.Dataset,
                      f"record), the records take {_range(100 * spr.record_share, 2)} %, the "
                      f"model {_range(100 * spr.model_share, 2)} %.")
     return lines + [""]
+
+
+def _importance_findings(sens: xr.Dataset) -> list[str]:
+    """Which parameter matters most: by variance share where the linear model explains
+    enough (R^2 >= the threshold), by |PRCC| elsewhere."""
+    thr = float(sens.attrs.get("r2_threshold", 0.7))
+    linear = sens.r2 >= thr
+    n_lin, n = int(linear.sum()), int(sens.r2.size)
+    names = [str(p) for p in sens.parameter.values]
+    mag = np.abs(sens.prcc).median(["wall", "diaphragm"])
+    by_prcc = sorted(names, key=lambda p: -float(mag.sel(parameter=p)))
+    text = (f"- **Which parameter matters most.** A linear model of the output on the "
+            f"sampled values explains R^2 = {_range(sens.r2, 2)} of its variance over the "
+            f"samples; in {n_lin} of {n} wall and diaphragm cells R^2 >= {thr:g}, and there "
+            "the parameters are ranked by their variance shares (squared standardised "
+            "regression coefficients), which measure importance, where PRCC measures only "
+            "how monotone an effect is.")
+    if n_lin:
+        share = sens.share.where(linear).median(["wall", "diaphragm"])
+        by_share = sorted(names, key=lambda p: -float(share.sel(parameter=p)))
+        top = sens.share.where(linear).fillna(-1).argmax("parameter")
+        counts = {p: int(((top == k) & linear).sum()) for k, p in enumerate(names)}
+        held = sens.rank_held.where(linear).median(["wall", "diaphragm"])
+        text += (" Median share over those cells: " + ", ".join(
+            f"`{p}` {100 * float(share.sel(parameter=p)):.0f} %" for p in by_share)
+            + "; the largest share is " + ", ".join(
+                f"`{p}`'s in {counts[p]}" for p in sorted(names, key=lambda q: -counts[q])
+                if counts[p]) + " of them. A parameter keeps its place in a cell's ranking "
+            "in " + ", ".join(f"`{p}` {100 * float(held.sel(parameter=p)):.0f} %"
+                              for p in by_share)
+            + " of bootstrap resamples of the samples (median over the cells)")
+        if by_share != by_prcc:
+            text += ("; by median |PRCC| the order would be " + ", ".join(
+                f"`{p}`" for p in by_prcc))
+        text += "."
+    else:
+        text += " Median |PRCC| over the cells: " + ", ".join(
+            f"`{p}` {_fmt(float(mag.sel(parameter=p)), 2)}" for p in by_prcc) + "."
+    return [text]
+
+
+def _shares_lines(ds: xr.Dataset, sens: xr.Dataset) -> list[str]:
+    """R^2, variance shares and PRCC side by side per wall and diaphragm."""
+    thr = float(sens.attrs.get("r2_threshold", 0.7))
+    names = [str(p) for p in sens.parameter.values]
+    rows = []
+    for w, d in _cell_labels(sens):
+        c = sens.sel(wall=w, diaphragm=d)
+        r2 = (f"{_fmt(float(c.r2), 2)}" + (f" (ranks {_fmt(float(c.r2_ranks), 2)})"
+                                            if int(c.ranks) else ""))
+        rows.append([w, d, r2, "share" if float(c.r2) >= thr else "PRCC"] + [
+            f"{100 * float(c.share.sel(parameter=p)):.0f} % "
+            f"[{100 * float(c.share_low.sel(parameter=p)):.0f}-"
+            f"{100 * float(c.share_high.sel(parameter=p)):.0f}] / "
+            f"{_fmt(float(c.prcc.sel(parameter=p)), 2)}" for p in names])
+    return ["### Variance shares beside PRCC", "",
+            f"Per cell: the R^2 of a least-squares linear model of the output on the "
+            f"sampled values (`impact` as 0/1: {' / '.join(UA.laws(ds))}), and each "
+            "parameter's share of the output's variance, its squared standardised "
+            "regression coefficient (Saltelli et al. 2008, The Primer, Section 1.2.5; "
+            "`urmx.uncertainty.variance_shares`), with its 95 % bootstrap interval over "
+            f"the {ds.sample.size} samples, beside its PRCC. Where R^2 < {thr:g} the "
+            "linear model leaves too much unexplained for its shares to rank the "
+            "parameters, and the ranking column says PRCC (the ranks' model replaces the "
+            "values' where it explains more: `ranks`). The shares sum to about R^2: the "
+            "Latin hypercube's inputs are nearly uncorrelated.", "",
+            *table(["wall", "diaphragm", "R^2", "ranked by", *names], rows), ""]
 
 
 def _spread_findings(ds: xr.Dataset, spr: xr.Dataset) -> list[str]:
@@ -291,7 +348,7 @@ def _sensitivity(ds: xr.Dataset, sens: xr.Dataset, out: Path) -> list[str]:
              "95 % interval from Fisher's z. A PRCC near +-1: the output follows that "
              "parameter monotonically whatever the others do; an interval holding 0: no "
              "monotone effect found.", "",
-             *table(["wall", "diaphragm", *names], rows), ""]
+             *table(["wall", "diaphragm", *names], rows), "", *_shares_lines(ds, sens)]
     if show_s1:
         s1 = sens.s1.median(["wall", "diaphragm"])
         conf = sens.s1_conf.median(["wall", "diaphragm"])

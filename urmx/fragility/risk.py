@@ -21,10 +21,34 @@ of exceedance, whose header names the measure and the units of each column::
     ...
 
 The measure is one of `urmx.fragility.RECORD_IMS` (``pga``, ``pgv``, ``sa_wall``,
-``sa_diaphragm``, ``sa_avg``) in its units (`urmx.fragility.IM_ATTRS`: m s-2, m s-1) or,
-for an acceleration, in ``g`` (standard gravity, 9.80665 m s-2); it must be the fit's
-measure. A design spectrum is a CSV file ``period [s],sa [g]`` (or ``sa [m s-2]``) of the
-5 %-damped spectral acceleration against period, interpolated linearly in period.
+``sa_diaphragm``, ``sa_avg``) or ``sa(T)``, the 5 %-damped Sa at a fixed period T [s]
+(``sa(0.3) [g]``), in its units (`urmx.fragility.IM_ATTRS`: m s-2, m s-1) or, for an
+acceleration, in ``g`` (standard gravity, 9.80665 m s-2); it must be the fit's measure.
+
+Computed or extrapolated. A comment line ``# computed_to = 0.6`` (in the intensity
+column's units) says up to which intensity the curve is computed; the rows beyond it are
+an extrapolation (the illustrative curve: a power law beyond the standard's 2500-year
+point). Without it the whole file counts as computed. Every rate comes with the share of
+it from ground motions beyond that intensity (``CollapseRisk.extrapolated_share``; beyond
+the file's last row the curve is extended along its end segment, which is extrapolation
+too), and its deaggregation by intensity (`deaggregate`): the share of the rate from
+ground motions in each band of return periods of the intensity (`BAND_PERIODS`), i.e.
+``integral over the band of P(C | x) |d lambda(x)|``.
+
+OpenQuake. :func:`read_hazard` also reads the engine's ``hazard_curve-*.csv`` outputs
+(``oq engine --export-outputs``; the layout of ``openquake/calculators/export/hazard.py``,
+``export_hcurves_by_imt_csv``): a first comment line holding ``investigation_time=...``
+and ``imt='PGA'`` (or ``SA(0.3)``, ``AvgSA``, ``PGV``), a header ``lon,lat[,depth],
+poe-<iml>,...`` and one row per site of probabilities of exceedance in the investigation
+time, converted to annual rates ``-ln(1 - poe) / investigation_time`` (Poisson). PGA, SA
+and AvgSA are in g, PGV in cm/s. One site is read (``site=``, default the first row);
+levels whose probability is 0 or 1 are left out (no rate). Every level of an engine file
+is computed: ``computed_to`` is its last level. ``AvgSA`` is taken as urmx's ``sa_avg``:
+the engine's ``avg_periods`` must be the wall's range (`urmx.fragility.sa_avg_range`),
+which the file does not state.
+
+A design spectrum is a CSV file ``period [s],sa [g]`` (or ``sa [m s-2]``) of the 5 %-damped
+spectral acceleration against period, interpolated linearly in period.
 """
 
 from __future__ import annotations
@@ -45,7 +69,12 @@ YEARS = 50.0  # default exposure time of `collapse_rate` [yr]
 SPAN = 8.0  # the integral covers the median times exp(+-SPAN dispersion)
 POINTS = 4001  # points of the integral
 RATE_UNITS = ("1/yr", "yr-1", "1/year", "a-1")
-_HEADER = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*\[\s*([^\]]*?)\s*\]\s*$")
+#: return periods [yr] of the intensities bounding the deaggregation's bands
+BAND_PERIODS = (100.0, 500.0, 2500.0, 10000.0)
+_SA_T = re.compile(r"^sa\(\s*([0-9.eE+-]+)\s*\)$")
+_COMPUTED = re.compile(r"^#\s*computed_to\s*=\s*([0-9.eE+-]+)\s*$")
+_HEADER = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*(?:\(\s*[0-9.eE+-]+\s*\))?)\s*\[\s*([^\]]*?)"
+                     r"\s*\]\s*$")
 
 
 @dataclass(frozen=True)
@@ -62,6 +91,9 @@ class HazardCurve:
         The measure and its units (None for a pair of arrays).
     source : str
         The file, or ``"arrays"``.
+    computed_to : float or None
+        The last intensity the file marks as computed (beyond: extrapolated); None: all
+        of it. [units]
     """
 
     intensity: np.ndarray
@@ -69,6 +101,7 @@ class HazardCurve:
     im: str | None = None
     units: str | None = None
     source: str = "arrays"
+    computed_to: float | None = None
 
 
 @dataclass(frozen=True)
@@ -84,10 +117,16 @@ class CollapseRisk:
     years : float
         Exposure time. [yr]
     tail_share : float
-        Share of `rate` from intensities beyond the hazard curve's (its end segments
-        extended). [1]
+        Share of `rate` from capacities beyond the hazard curve's intensities (its end
+        segments extended). [1]
     im, units : str or None
         The measure and units of the hazard curve and the fit.
+    extrapolated_share : float
+        Share of `rate` from ground motions beyond the last intensity the hazard file
+        marks as computed (module docstring). [1]
+    bands : tuple of (float, float, float)
+        The deaggregation: (low, high, share) per band of intensity (`deaggregate`).
+        [units], [units], [1]
     """
 
     rate: float
@@ -96,6 +135,8 @@ class CollapseRisk:
     tail_share: float
     im: str | None = None
     units: str | None = None
+    extrapolated_share: float = math.nan
+    bands: tuple = ()
 
 
 def _read_rows(path: Path, what: str) -> tuple[list[tuple[str, str]], list[tuple[int, list]]]:
@@ -132,9 +173,33 @@ def _read_rows(path: Path, what: str) -> tuple[list[tuple[str, str]], list[tuple
     return header, rows
 
 
+def measure(name: str, where: str = "hazard curve") -> str:
+    """The canonical name of an intensity measure: one of `RECORD_IMS`, or ``sa(T)`` with
+    T written as ``%g`` (``sa(0.30)`` -> ``sa(0.3)``); anything else is refused."""
+    name = name.strip()
+    if name in RECORD_IMS:
+        return name
+    m = _SA_T.match(name.lower())
+    if m:
+        try:
+            period = float(m.group(1))
+        except ValueError:
+            period = math.nan
+        if math.isfinite(period) and period > 0:
+            return f"sa({period:g})"
+    raise InputError(f"{where}: the first column must be an intensity measure "
+                     f"({', '.join(RECORD_IMS)}, or sa(T) with the period T in s); got "
+                     f"{name!r}")
+
+
+def measure_units(im: str) -> str:
+    """The SI units of a measure (`measure`): m s-2 for sa(T)."""
+    return "m s-2" if im.startswith("sa(") else IM_ATTRS[im][0]
+
+
 def _to_si(im: str, units: str, where: str) -> float:
     """Factor from `units` to the SI units of measure `im` (g for accelerations)."""
-    si = IM_ATTRS[im][0]
+    si = measure_units(im)
     if units == si:
         return 1.0
     if units == "g" and si == "m s-2":
@@ -155,8 +220,15 @@ def _monotone(x: np.ndarray, rows: list, what: str, rising: bool, where: str) ->
                          f"from row to row; got {float(x[k - 1])!r} then {float(x[k])!r}")
 
 
-def read_hazard(path: str | os.PathLike) -> HazardCurve:
-    """A hazard curve from a CSV file (module docstring), in the measure's SI units.
+def read_hazard(path: str | os.PathLike, site: int = 0) -> HazardCurve:
+    """A hazard curve from a CSV file, plain or the OpenQuake engine's (module docstring),
+    in the measure's SI units.
+
+    Parameters
+    ----------
+    path : str or path-like
+    site : int
+        The row (site) of an OpenQuake file (0: the first).
 
     Raises
     ------
@@ -168,19 +240,98 @@ def read_hazard(path: str | os.PathLike) -> HazardCurve:
 
     path_argument("read_hazard", "path", path)
     path = Path(path)
+    try:
+        first = next((ln for ln in path.read_text(encoding="utf-8").splitlines()
+                      if ln.strip()), "")
+    except FileNotFoundError:
+        raise MissingFileError(f"hazard curve {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"hazard curve {str(path)!r} cannot be read: {exc}") from None
+    if first.lstrip().startswith("#") and "investigation_time" in first:
+        return read_openquake(path, site)
     header, rows = _read_rows(path, "hazard curve")
-    (im, units), (rname, runits) = header
-    if im not in RECORD_IMS:
-        raise InputError(f"{path}: the first column must be an intensity measure "
-                         f"({', '.join(RECORD_IMS)}); got {im!r}")
+    (name, units), (rname, runits) = header
+    im = measure(name, str(path))
     if runits not in RATE_UNITS:
         raise InputError(f"{path}: the second column ({rname}) must be a mean annual "
                          f"frequency of exceedance in '1/yr'; got units {runits!r}")
     data = np.array([v for _, v in rows])
-    intensity = data[:, 0] * _to_si(im, units, str(path))
+    factor = _to_si(im, units, str(path))
+    intensity = data[:, 0] * factor
     _monotone(intensity, rows, "intensity", True, str(path))
     _monotone(data[:, 1], rows, "annual rate", False, str(path))
-    return HazardCurve(intensity, data[:, 1], im, IM_ATTRS[im][0], str(path))
+    computed = None
+    for line in path.read_text(encoding="utf-8").splitlines():
+        m = _COMPUTED.match(line.strip())
+        if m:
+            try:
+                computed = float(m.group(1)) * factor
+            except ValueError:
+                raise InputError(f"{path}: {line.strip()!r}: computed_to must be a "
+                                 "number") from None
+    return HazardCurve(intensity, data[:, 1], im, measure_units(im), str(path), computed)
+
+
+#: OpenQuake's intensity measure types: urmx's name and the factor of the engine's units
+_OQ_IMT = {"PGA": ("pga", STANDARD_GRAVITY), "PGV": ("pgv", 0.01),
+           "AVGSA": ("sa_avg", STANDARD_GRAVITY)}
+
+
+def read_openquake(path: str | os.PathLike, site: int = 0) -> HazardCurve:
+    """A hazard curve from an OpenQuake engine ``hazard_curve-*.csv`` file (module
+    docstring): the site in row `site`, probabilities of exceedance in the investigation
+    time turned into annual rates."""
+    path = Path(path)
+    lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
+    meta = lines[0]
+    t = re.search(r"investigation_time\s*=\s*([0-9.eE+-]+)", meta)
+    imt = re.search(r"imt\s*=\s*['\"]?([A-Za-z]+(?:\([0-9.]+\))?)", meta)
+    if t is None or imt is None:
+        raise InputError(f"{path}:1: an OpenQuake hazard curve names investigation_time=... "
+                         f"and imt='...' in its first line; got {meta.strip()!r}")
+    years = float(t.group(1))
+    name = imt.group(1)
+    if name.upper() in _OQ_IMT:
+        im, factor = _OQ_IMT[name.upper()]
+    elif name.upper().startswith("SA("):
+        im, factor = measure(name.lower(), str(path)), STANDARD_GRAVITY
+    else:
+        raise InputError(f"{path}:1: imt {name!r} is not one urmx computes (PGA, PGV, "
+                         "SA(T), AvgSA)")
+    head = [c.strip() for c in lines[1].split(",")]
+    cols = [k for k, c in enumerate(head) if c.startswith("poe-")]
+    if len(cols) < 2:
+        raise InputError(f"{path}:2: the header needs poe-<level> columns; got {lines[1]!r}")
+    if not 0 <= site < len(lines) - 2:
+        raise InputError(f"{path}: site {site} is not a row (the file has "
+                         f"{len(lines) - 2} sites)")
+    cells = lines[2 + site].split(",")
+    try:
+        levels = np.array([float(head[k][4:]) for k in cols])
+        poe = np.array([float(cells[k]) for k in cols])
+    except (ValueError, IndexError):
+        raise InputError(f"{path}:{3 + site}: {lines[2 + site]!r} is not a row of "
+                         "probabilities for the header's levels") from None
+    keep = (poe > 0) & (poe < 1)
+    if keep.sum() < 2:
+        raise InputError(f"{path}: fewer than two levels with a probability of exceedance "
+                         "between 0 and 1")
+    rate = -np.log1p(-poe[keep]) / years
+    rows = [(3 + site, None)] * int(keep.sum())
+    _monotone(levels[keep], rows, "intensity", True, str(path))
+    _monotone(rate, rows, "annual rate", False, str(path))
+    x = levels[keep] * factor
+    return HazardCurve(x, rate, im, measure_units(im), str(path), float(x[-1]))
+
+
+def scaled_curve(curve: HazardCurve, factor: float, im: str) -> HazardCurve:
+    """The curve of another spectral measure whose uniform-hazard ordinates are `factor`
+    times this one's at every return period (a code spectrum scaled by its return period
+    factor, as NZS 1170.5 does: Sa(T) = Ch(T) Z R N): the intensities (and `computed_to`)
+    times `factor`, the rates unchanged."""
+    return HazardCurve(curve.intensity * factor, curve.rate, im, measure_units(im),
+                       f"{curve.source} scaled x{factor:.4g} to {im}",
+                       None if curve.computed_to is None else curve.computed_to * factor)
 
 
 def _curve(hazard, fit) -> HazardCurve:
@@ -202,6 +353,10 @@ def _curve(hazard, fit) -> HazardCurve:
         raise InputError(f"hazard must be a CSV file or a pair (intensity, annual_rate) of "
                          f"arrays, not {type(hazard).__name__}")
     fim, funits = getattr(fit, "im", None), getattr(fit, "units", None)
+    try:
+        fim = measure(fim) if fim is not None else None
+    except InputError:
+        pass  # a measure of no hazard curve (the scale factor): refused just below
     if curve.im is not None and fim is not None and (curve.im, curve.units) != (fim, funits):
         raise InputError(f"{curve.source}: the hazard curve is in {curve.im} [{curve.units}], "
                          f"the fragility in {fim} [{funits}]: they must be the same measure")
@@ -226,7 +381,8 @@ def collapse_rate(fit, hazard, years: float = YEARS) -> CollapseRisk:
     Returns
     -------
     CollapseRisk
-        ``rate`` [1/yr], ``probability`` [1] in `years`, ``tail_share`` [1].
+        ``rate`` [1/yr], ``probability`` [1] in `years`, ``tail_share`` [1], its
+        deaggregation ``bands`` and ``extrapolated_share`` [1] (`deaggregate`).
     """
     if not (hasattr(fit, "median") and hasattr(fit, "dispersion")):
         from ..errors import got
@@ -245,8 +401,9 @@ def collapse_rate(fit, hazard, years: float = YEARS) -> CollapseRisk:
                          f"{median!r}, {beta!r}")
     curve = _curve(hazard, fit)
     rate, tail = rates(curve, np.array([median]), np.array([beta]))
+    bands, extrapolated = deaggregate(curve, median, beta)
     return CollapseRisk(float(rate[0]), float(-np.expm1(-rate[0] * years)), years,
-                        float(tail[0]), curve.im, curve.units)
+                        float(tail[0]), curve.im, curve.units, extrapolated, bands)
 
 
 def rates(curve: HazardCurve, median, dispersion,
@@ -271,6 +428,59 @@ def rates(curve: HazardCurve, median, dispersion,
     tail = (np.sum(out, -1) - 0.5 * (out[..., 0] + out[..., -1])) * dz
     with np.errstate(invalid="ignore", divide="ignore"):
         return total, np.where(total > 0, tail / total, 0.0)
+
+
+def _log_rate(curve: HazardCurve, u: np.ndarray) -> np.ndarray:
+    """ln lambda at ln-intensities `u`: linear in (ln x, ln lambda), extended along the end
+    segments."""
+    lx, ll = np.log(curve.intensity), np.log(curve.rate)
+    out = np.interp(u, lx, ll)
+    out = np.where(u < lx[0], ll[0] + (u - lx[0]) * (ll[1] - ll[0]) / (lx[1] - lx[0]), out)
+    return np.where(u > lx[-1], ll[-1] + (u - lx[-1]) * (ll[-1] - ll[-2])
+                    / (lx[-1] - lx[-2]), out)
+
+
+def band_edges(curve: HazardCurve, periods=BAND_PERIODS) -> np.ndarray:
+    """The intensities whose annual rate of exceedance is 1 / `periods` [yr] on the curve
+    (extended along its end segments when needed), increasing. [units]"""
+    lx, ll = np.log(curve.intensity), np.log(curve.rate)
+    target = -np.log(np.asarray(periods, dtype=float))
+    # ln lambda falls with ln x: invert segment by segment, extending the end segments
+    inner = np.interp(-target, -ll, lx)
+    lo = lx[0] + (target - ll[0]) * (lx[1] - lx[0]) / (ll[1] - ll[0])
+    hi = lx[-1] + (target - ll[-1]) * (lx[-1] - lx[-2]) / (ll[-1] - ll[-2])
+    u = np.where(target > ll[0], lo, np.where(target < ll[-1], hi, inner))
+    return np.exp(u)
+
+
+def deaggregate(curve: HazardCurve, median: float, dispersion: float,
+                periods=BAND_PERIODS, points: int = POINTS) -> tuple[tuple, float]:
+    """Where a collapse rate comes from: the shares of ``integral P(C | x) |d lambda(x)|``
+    from ground motions in each band of intensity between the intensities of return
+    periods `periods` (`band_edges`; the first band from 0, the last to infinity), and the
+    share from intensities beyond the curve's ``computed_to`` (its last row when None).
+
+    Returns
+    -------
+    (tuple of (float, float, float), float)
+        ``((low, high, share), ...)`` [units], [units], [1], and the extrapolated share [1].
+    """
+    from scipy.special import ndtr
+
+    z = np.linspace(-SPAN, SPAN, int(points))
+    u = math.log(median) + z * dispersion
+    lam = np.exp(_log_rate(curve, u))
+    mid = 0.5 * (u[1:] + u[:-1])
+    part = ndtr((mid - math.log(median)) / dispersion) * (lam[:-1] - lam[1:])
+    part = np.r_[part, lam[-1]]  # beyond the grid every ground motion collapses the wall
+    where = np.r_[mid, u[-1]]
+    total = float(part.sum())
+    edges = np.r_[0.0, band_edges(curve, periods), np.inf]
+    x = np.exp(where)
+    bands = tuple((float(lo), float(hi), float(part[(x >= lo) & (x < hi)].sum() / total))
+                  for lo, hi in zip(edges[:-1], edges[1:], strict=True))
+    last = curve.intensity[-1] if curve.computed_to is None else curve.computed_to
+    return bands, float(part[x > last].sum() / total)
 
 
 @dataclass(frozen=True)

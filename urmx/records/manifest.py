@@ -59,6 +59,10 @@ def _read_manifest(src: Path) -> list[dict]:
             raise ManifestError(src, f"record #{k + 1} ({entry.get('id', '?')}) lacks "
                                 f"{', '.join(missing)}")
         _validate(src, k, entry)
+        group = entry.get("group")
+        if group is not None and not (isinstance(group, str) and group.strip()):
+            raise ManifestError(src, f"record {entry.get('id', '?')}: group must be a "
+                                f"non-empty string (a station or event), not {group!r}")
     return records
 
 
@@ -129,9 +133,11 @@ def manifest(records_dir: str | os.PathLike | None = None,
     dict of str to dict
         Record id -> entry with every manifest field (id, set, event, date, magnitude,
         station, component, site, source, file, format, dt [s], unit, sha256,
-        expected_pga_g [g], paper_scale_factor, scale_factor, notes, ...), in file order;
-        ``manifest`` names the file the entry comes from, ``folder`` the records folder
-        its file is read from and ``path`` the file itself.
+        expected_pga_g [g], paper_scale_factor, scale_factor, notes, and the optional
+        ``group``: records of one station or event, resampled together by the fits'
+        bootstraps and the sufficiency tests, ...), in file order; ``manifest`` names the
+        file the entry comes from, ``folder`` the records folder its file is read from and
+        ``path`` the file itself.
 
     Raises
     ------

@@ -32,12 +32,13 @@ from .sampler import (
     sample_values,
     unit_design,
 )
-from .sensitivity import prcc, sobol_indices, variance_split
+from .sensitivity import R2_THRESHOLD, prcc, sobol_indices, variance_shares, variance_split
 from .spread import lognormal_fit, modelling_fit
 
 __all__ = [
     "Distribution", "ParameterError", "parse_distribution", "METHODS", "PARAMETERS",
     "Sampling", "apply", "check_samples", "coordinate_name", "parse_sampling",
     "sample_values", "unit_design", "prcc", "sobol_indices", "variance_split",
+    "variance_shares", "R2_THRESHOLD",
     "lognormal_fit", "modelling_fit",
 ]

@@ -9,6 +9,12 @@ and scipy, with SALib for the Sobol' indices.
   bootstrap confidence, by SALib: Saltelli's estimators on a ``saltelli`` design
   (Saltelli et al. 2010), else the first-order index alone by RBD-FAST (Tarantola et al.
   2006, with the bias correction of Tissot & Prieur 2012), which reads any design.
+- :func:`variance_shares`: the R^2 of a linear model of the output on the inputs (their
+  ranks when the linear model explains too little) and the squared standardised
+  regression coefficients as the inputs' shares of the output's variance, with bootstrap
+  intervals over the runs (Saltelli et al. 2008, Global Sensitivity Analysis: The Primer,
+  Section 1.2.5: for a linear model of independent inputs the squared SRCs sum to R^2 and
+  each is the share of the variance its input explains).
 - :func:`variance_split`: the random-effects analysis of variance of a (sample, record)
   table: the variance of the records' effect, of the samples' (the model's) and of their
   interaction, each an unbiased estimate from the mean squares.
@@ -28,6 +34,83 @@ from ..errors import InputError
 
 CONF_LEVEL = 0.95  # of every confidence interval here
 RESAMPLES = 1000  # bootstrap resamples of the Sobol' indices
+#: R^2 from which the linear model's variance shares rank the inputs (below it the
+#: model leaves too much of the variance unexplained and PRCC ranks them): the value
+#: commonly used with standardised regression coefficients (Saltelli et al. 2004,
+#: Sensitivity Analysis in Practice, Section 1.2, use SRCs when the linear model's R^2 is
+#: high; 0.7 is our choice of "high", the section gives no single number we could find)
+R2_THRESHOLD = 0.7
+
+
+def _src(x: np.ndarray, y: np.ndarray, w: np.ndarray | None = None):
+    """R^2 and standardised regression coefficients of least squares of y (n,) on the
+    columns of x (n, d), for rows of bootstrap weights `w` (B, n) or once."""
+    w = np.ones((1, y.size)) if w is None else w
+    sw = w.sum(1, keepdims=True)
+    mx = (w @ x) / sw
+    my = (w @ y)[:, None] / sw
+    xc = x[None, :, :] - mx[:, None, :]
+    yc = y[None, :] - my
+    sx = np.sqrt(np.einsum("bn,bnd->bd", w, xc ** 2) / sw)
+    sy = np.sqrt(np.sum(w * yc ** 2, 1) / sw[:, 0])
+    a = np.einsum("bn,bnd,bne->bde", w, xc, xc)
+    c = np.einsum("bn,bnd,bn->bd", w, xc, yc)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        coef = np.linalg.solve(a + 1e-12 * np.eye(x.shape[1]), c[..., None])[..., 0]
+        fitted = np.einsum("bnd,bd->bn", xc, coef)
+        r2 = 1.0 - np.sum(w * (yc - fitted) ** 2, 1) / np.sum(w * yc ** 2, 1)
+        src = coef * sx / sy[:, None]
+    return r2, src
+
+
+def variance_shares(x, y, conf_level: float = CONF_LEVEL, resamples: int = RESAMPLES,
+                    seed: int = 0, threshold: float = R2_THRESHOLD) -> dict:
+    """How much of the variance of `y` each column of `x` explains by a linear model.
+
+    Least squares of `y` on the columns of `x` (the inputs' values: a ``choice`` input as
+    its level's index) gives ``r2``; when it is below `threshold` and the model of the
+    ranks (of both) explains more, the ranks' model is used instead (``ranks`` True).
+    The squared standardised regression coefficients ``share = (b_j s_j / s_y)^2`` are the
+    inputs' shares of the variance (they sum to R^2 for uncorrelated inputs, as a Latin
+    hypercube's nearly are), with their `conf_level` percentile intervals over `resamples`
+    bootstrap resamples of the runs (``share_low``, ``share_high``) and, for each input,
+    the share of resamples in which it keeps its place in the ranking by share
+    (``rank_held``). Runs with a NaN output are left out.
+
+    Returns
+    -------
+    dict
+        ``r2`` and ``r2_ranks`` (float), ``ranks`` (bool), ``share``, ``share_low``,
+        ``share_high``, ``rank_held`` (arrays of shape (d,)).
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    keep = np.isfinite(y)
+    x, y = x[keep], y[keep]
+    d = x.shape[1]
+    nan = np.full(d, np.nan)
+    if y.size <= d + 2 or np.ptp(y) == 0:
+        return {"r2": math.nan, "r2_ranks": math.nan, "ranks": False, "share": nan,
+                "share_low": nan, "share_high": nan, "rank_held": nan}
+    r2, _ = _src(x, y)
+    xr_, yr = _ranks(x), _ranks(y[:, None])[:, 0]
+    r2r, _ = _src(xr_, yr)
+    use_ranks = bool(r2[0] < threshold and r2r[0] > r2[0])
+    xx, yy = (xr_, yr) if use_ranks else (x, y)
+    _, src = _src(xx, yy)
+    share = src[0] ** 2
+    rng = np.random.default_rng(seed)
+    w = rng.multinomial(y.size, np.full(y.size, 1.0 / y.size), size=resamples).astype(float)
+    _, bsrc = _src(xx, yy, w)
+    bshare = bsrc ** 2
+    a = (1.0 - conf_level) / 2.0
+    order = np.argsort(-share)
+    place = np.empty(d, int)
+    place[order] = np.arange(d)
+    bplace = np.argsort(np.argsort(-np.nan_to_num(bshare, nan=-1.0), axis=1), axis=1)
+    return {"r2": float(r2[0]), "r2_ranks": float(r2r[0]), "ranks": use_ranks,
+            "share": share, "share_low": np.nanquantile(bshare, a, axis=0),
+            "share_high": np.nanquantile(bshare, 1.0 - a, axis=0),
+            "rank_held": np.mean(bplace == place[None, :], axis=0)}
 
 
 def _ranks(a: np.ndarray) -> np.ndarray:

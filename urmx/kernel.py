@@ -939,11 +939,11 @@ def _newton(cf, m, lo, hi, tol, guess, order):
             a = x
         else:
             b = x
+        if b - a <= tol:
+            break
         xn = x - f / df if df != 0.0 else 0.5 * (a + b)
         if not (a < xn < b):
             xn = 0.5 * (a + b)
-        if b - a <= tol:
-            break
         if abs(xn - x) < 0.5 * tol:
             if order == 0:  # converged: to the last ulps from Newton's point
                 return _polish(cf, m, a, b, xn, 0)
@@ -952,6 +952,9 @@ def _newton(cf, m, lo, hi, tol, guess, order):
             xn = min(max(xn, a), b)
         x = xn
     if order == 0:  # (the bracket closed before a Newton step was that short)
+        xn = x - f / df if df != 0.0 else 0.5 * (a + b)
+        if not (a < xn < b):
+            xn = 0.5 * (a + b)
         return _polish(cf, m, a, b, xn, 3)
     return a, b
 

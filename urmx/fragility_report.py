@@ -157,7 +157,7 @@ def write_report(archive, out_dir: str | os.PathLike, hazard=None, spectrum=None
     comparison = im_comparison(ds, risk, spectrum, records_dir)
     lines = [*_header(ds, d), *_findings(d, ranks, t, stf),
              *measure_findings(measures), *risk_findings(risk),
-             *comparison_findings(comparison), "", *_medians(ds, d, groups),
+             *comparison_findings(comparison, records_per_cell(ds)), "", *_medians(ds, d, groups),
              *_curves(ds, d, out), *measures_section(ds, measures, out),
              *_slenderness(ds, d, ranks, out), *_resonance(ds, t, out),
              *_stiffening(d, stf, out), *risk_section(ds, risk, out, comparison)]

@@ -25,6 +25,7 @@ from .markdown import table
 from .reporting import (
     DEGENERATE,
     DEGENERATE_NOTE,
+    MIN_RECORDS,
     enough_records,
     interval,
     pct,
@@ -353,10 +354,14 @@ def risk_findings(r: dict | None) -> list[str]:
     return lines
 
 
-def comparison_findings(c: xr.Dataset | None) -> list[str]:
-    """The findings bullet of `im_comparison`."""
+def comparison_findings(c: xr.Dataset | None, records: int = MIN_RECORDS) -> list[str]:
+    """The findings bullet of `im_comparison` (from fewer than `MIN_RECORDS` records per
+    wall and diaphragm: what it would need, no ratio of rates)."""
     if c is None:
         return []
+    if not enough_records(records):
+        return [f"- **Risk in pga against sa_avg.** Not compared: "
+                f"{too_few(records, 'comparing rates in two measures')}."]
     labs = [str(x) for x in c.diaphragm.values if FA.base_label(str(x)) in STIFFEN]
     ratio = c.ratio.sel(diaphragm=labs)
     ext = c.pga_extrapolated.sel(diaphragm=labs)

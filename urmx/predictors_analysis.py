@@ -128,13 +128,15 @@ def rankings(pop: dict[str, Any], replicates: int = 200, k: int = 5,
     return out
 
 
-def rigid_reference(pop: dict[str, Any], replicates: int = 200,
-                    seed: int = 37) -> dict[str, Any]:
-    """The walls with rigid diaphragms (both storeys together, storey as a 0/1 input beside
-    each geometric predictor): each wall-alone predictor alone, in PGA."""
+def rigid_reference(pop: dict[str, Any], replicates: int = 200, seed: int = 37):
+    """The walls with rigid diaphragms (both storeys together): each wall-alone predictor
+    alone, in PGA (a `urmx.fragility.ranking.Ranking`; None with fewer than 10 such
+    walls)."""
     from .fragility.ranking import rank
 
     mask = pop["rigid"]
+    if mask.sum() < 10:
+        return None
     x = {n: v for n, v in log_predictors(pop, mask).items()
          if n not in ("diaphragm_frequency", "frequency_ratio")}
     y = np.log(pop["median_pga"][mask])

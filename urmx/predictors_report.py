@@ -341,10 +341,13 @@ def _findings(a: dict[str, Any]) -> list[str]:
                 f"the recommended criterion is **{_label(pick['names'])}** "
                 f"({pick['share']:.0%}, dispersion {pick['dispersion']:.2f}).")
     rig = a["rigid"]
-    k = rig.index(("slenderness",))
-    lines += ["", f"- Reference, rigid diaphragms ({rig.n} walls, both storeys): h/t explains "
-              f"{rig.share[k]:.0%} [{rig.lower[k]:.0%}, {rig.upper[k]:.0%}] (rank {k + 1}; the "
-              f"best single predictor {_label(rig.sets[0])} {rig.share[0]:.0%}).",
+    if rig is not None:
+        k = rig.index(("slenderness",))
+        lines += ["", f"- Reference, rigid diaphragms ({rig.n} walls, both storeys): h/t "
+                  f"explains {rig.share[k]:.0%} [{rig.lower[k]:.0%}, {rig.upper[k]:.0%}] (rank "
+                  f"{k + 1}; the best single predictor {_label(rig.sets[0])} "
+                  f"{rig.share[0]:.0%})."]
+    lines += ["",
               "- The control q (diaphragm seismic weight, which the dynamics cannot see once "
               "O/W and f_d are drawn) ranks "
               + ", ".join(f"{a['ranks'][s, m].rank(('diaphragm_weight',))} of "

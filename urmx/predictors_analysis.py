@@ -174,7 +174,9 @@ def resonance(pop: dict[str, Any], replicates: int = 200, seed: int = 37,
         capacity in resonance over the wall's median) and its interval;
         ``factor_adjusted`` the same with each record's mean ``e`` over the walls taken
         out (resonance beyond the record's own severity per unit PGA); ``slope``,
-        ``slope_interval``, ``s_mean`` (mean of s), ``spread`` and
+        ``slope_interval``, ``slope_within`` and its interval (the slope within each
+        record: the walls' S differing by their diaphragm's period alone), ``s_mean``
+        (mean of s), ``spread`` and
         ``spread_rule`` (standard deviation of e before and after the slope rule); and the
         cells ``x`` (log ratio), ``s``, ``e``.
     """
@@ -214,11 +216,15 @@ def _resonance_stats(c: dict[str, np.ndarray], edges: np.ndarray) -> dict[str, A
     rec = c["record"]
     own = np.bincount(rec, weights=e) / np.maximum(np.bincount(rec), 1)
     adjusted = e - own[rec]
+    s_rec = np.bincount(rec, weights=s) / np.maximum(np.bincount(rec), 1)
+    sw = s - s_rec[rec]
+    within = float(np.sum(sw * adjusted) / np.sum(sw * sw))
     return {"mean": mean, "count": np.bincount(b[(b >= 0) & (b < len(edges) - 1)],
                                                minlength=len(edges) - 1),
             "factor": float(math.exp(e[band].mean())),
             "factor_adjusted": float(math.exp(adjusted[band].mean())),
-            "band_cells": int(band.sum()), "slope": slope, "s_mean": float(s.mean()),
+            "band_cells": int(band.sum()), "slope": slope, "slope_within": within,
+            "s_mean": float(s.mean()),
             "spread": float(e.std()), "spread_rule": float((e - slope * sc).std())}
 
 
@@ -229,7 +235,7 @@ def _resonance_boot(c: dict[str, np.ndarray], edges: np.ndarray, replicates: int
     rng = np.random.default_rng(seed)
     walls, recs = np.unique(c["wall"]), np.unique(c["record"])
     by_wall = {w: np.flatnonzero(c["wall"] == w) for w in walls}
-    means, factors, slopes, adjusted = [], [], [], []
+    means, factors, slopes, adjusted, withins = [], [], [], [], []
     for _ in range(replicates):
         w = rng.choice(walls, len(walls))
         r_count = np.bincount(rng.choice(recs, len(recs)), minlength=recs.max() + 1)
@@ -240,8 +246,10 @@ def _resonance_boot(c: dict[str, np.ndarray], edges: np.ndarray, replicates: int
         factors.append(st["factor"])
         adjusted.append(st["factor_adjusted"])
         slopes.append(st["slope"])
+        withins.append(st["slope_within"])
     q = [0.025, 0.975]
     lo, hi = np.nanquantile(np.array(means), q, axis=0)
     return {"lower": lo, "upper": hi, "factor_interval": tuple(np.quantile(factors, q)),
             "factor_adjusted_interval": tuple(np.quantile(adjusted, q)),
-            "slope_interval": tuple(np.quantile(slopes, q))}
+            "slope_interval": tuple(np.quantile(slopes, q)),
+            "slope_within_interval": tuple(np.quantile(withins, q))}

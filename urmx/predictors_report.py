@@ -223,6 +223,8 @@ def numbers(a: dict[str, Any]) -> dict[str, Any]:
             "s_reference": math.exp(res["s_mean"]), "band_factor": res["factor"],
             "band_factor_interval": list(res["factor_interval"]), "band": pa.BAND,
             "band_factor_adjusted": res["factor_adjusted"],
+            "slope_within": res["slope_within"],
+            "slope_within_interval": list(res["slope_within_interval"]),
             "band_factor_adjusted_interval": list(res["factor_adjusted_interval"]),
             "spread": res["spread"], "spread_rule": res["spread_rule"]}
     return out
@@ -276,7 +278,8 @@ def _design_lines(a: dict[str, Any]) -> list[str]:
              "parametric walls had 0.996 between ln(h/t) and ln(rocking period). "
              f"{'No pair exceeds 0.9: met.' if c['inputs']['max'] <= 0.9 else 'NOT MET.'}",
              f"- Log predictors (walls on flexible diaphragms): the largest |r| is "
-             f"**{c['predictors']['max']:.3f}** ({_label(c['predictors']['pair'])})."]
+             f"**{c['predictors']['max']:.3f}** "
+             f"({' / '.join(_label([p]) for p in c['predictors']['pair'])})."]
     if pairs:
         lines.append("  Pairs above 0.9, each a function of the other by its formula (not a "
                      "confound of the design, which cannot separate a quantity from its own "
@@ -289,8 +292,9 @@ def _design_lines(a: dict[str, Any]) -> list[str]:
 
 def _resonance_lines(a: dict[str, Any]) -> list[str]:
     rows = ["| storey | cells | band cells | capacity factor in the band [95 %] | same, "
-            "record severity out [95 %] | slope b [95 %] | S_ref | spread of ln C/median, "
-            "before -> after the slope rule |", "|---|---|---|---|---|---|---|---|"]
+            "record severity out [95 %] | slope b [95 %] | slope within records [95 %] | "
+            "S_ref | spread of ln C/median, before -> after the slope rule |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for storey in pa.STOREYS:
         r = a["resonance"][storey]
         rows.append(f"| {storey} | {len(r['e'])} | {r['band_cells']} | {r['factor']:.3f} "
@@ -298,7 +302,9 @@ def _resonance_lines(a: dict[str, Any]) -> list[str]:
                     f"{r['factor_adjusted']:.3f} [{r['factor_adjusted_interval'][0]:.3f}, "
                     f"{r['factor_adjusted_interval'][1]:.3f}] | {r['slope']:.3f} "
                     f"[{r['slope_interval'][0]:.3f}, "
-                    f"{r['slope_interval'][1]:.3f}] | {math.exp(r['s_mean']):.2f} | "
+                    f"{r['slope_interval'][1]:.3f}] | {r['slope_within']:.3f} "
+                    f"[{r['slope_within_interval'][0]:.3f}, {r['slope_within_interval'][1]:.3f}]"
+                    f" | {math.exp(r['s_mean']):.2f} | "
                     f"{r['spread']:.3f} -> {r['spread_rule']:.3f} |")
     rows += ["", "Binned mean of ln(C / median C) against the record's dominant frequency over "
              "the diaphragm's:", "", "| f_rec / f_d | " + " | ".join(pa.STOREYS) + " |",
@@ -339,14 +345,19 @@ def _findings(a: dict[str, Any]) -> list[str]:
                 f"**{'adequate' if ok else 'not adequate'}** (its share "
                 f"{'is' if ok else 'is not'} within the bootstrap uncertainty of the best); "
                 f"the recommended criterion is **{_label(pick['names'])}** "
-                f"({pick['share']:.0%}, dispersion {pick['dispersion']:.2f}).")
+                f"({pick['share']:.0%}, dispersion {pick['dispersion']:.2f}); the best single "
+                f"predictor is {_label(rec['best_single']['names'])} "
+                f"({rec['best_single']['share']:.0%}, dispersion "
+                f"{rec['best_single']['dispersion']:.2f}).")
     rig = a["rigid"]
     if rig is not None:
         k = rig.index(("slenderness",))
         lines += ["", f"- Reference, rigid diaphragms ({rig.n} walls, both storeys): h/t "
                   f"explains {rig.share[k]:.0%} [{rig.lower[k]:.0%}, {rig.upper[k]:.0%}] (rank "
                   f"{k + 1}; the best single predictor {_label(rig.sets[0])} "
-                  f"{rig.share[0]:.0%})."]
+                  f"{rig.share[0]:.0%}): h/t is "
+                  f"{'within' if within(rig, k) else 'outside'} the uncertainty of the best "
+                  "there."]
     lines += ["",
               "- The control q (diaphragm seismic weight, which the dynamics cannot see once "
               "O/W and f_d are drawn) ranks "
@@ -383,9 +394,14 @@ def _rule_lines(a: dict[str, Any]) -> list[str]:
                      f"{r['slope']:.3f}; equivalently assess against a demand PGA x "
                      f"(S / {math.exp(r['s_mean']):.2f})^{-r['slope']:.3f}.")
     lines += ["", "By hand: read Sa at the diaphragm's period and the PGA off the spectrum, form "
-              "S, and reduce the wall's capacity (or raise the demand) by the factor; where the "
-              "spectrum's dominant frequency lies within a factor 1.41 of the diaphragm's, the "
-              "band factors above are the simpler, coarser statement of the same effect."]
+              "S, and multiply the wall's median capacity by the factor (or divide the demand "
+              "PGA by it). The coarser statement of the same effect: where the record's "
+              "dominant frequency lies within a factor 1.41 of the diaphragm's, reduce the "
+              "capacity by the band factor with the record's own severity taken out (the "
+              "table's fifth column); the raw band factor stays near 1 because records whose "
+              "dominant frequency is high are also the ones that need a large PGA to collapse "
+              "any wall (the binned table: ln C / median rises with f_rec / f_d), which hides "
+              "the dip at resonance unless each record's own level is taken out."]
     return lines
 
 

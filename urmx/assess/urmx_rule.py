@@ -47,14 +47,18 @@ SOURCE = ("urmx wall-population study (issue 37), reports/predictors/REPORT.md: 
 #: ``relations["<storey>/pga/recommended"]``): ln C_50 = intercept + sum b ln x [m s-2]
 RELATIONS: dict[str, dict] = {
     "single": {"predictors": ["static_acceleration", "effective_period"],
-               "intercept": 0.0, "exponents": [1.0, 1.0], "dispersion": 0.0},
+               "intercept": 0.4064599029551148,
+               "exponents": [0.8960312696407047, 0.9742028758028852],
+               "dispersion": 0.11720989768922803},
     "higher": {"predictors": ["static_acceleration", "effective_period"],
-               "intercept": 0.0, "exponents": [1.0, 1.0], "dispersion": 0.0},
+               "intercept": 0.2621392142609747,
+               "exponents": [0.8989782262447095, 0.9598541834994312],
+               "dispersion": 0.1850915835365741},
 }
 #: storey -> resonance slope c and S_ref (numbers.json ``resonance["<storey>"]``)
 RESONANCE: dict[str, dict] = {
-    "single": {"slope": 0.0, "s_reference": 1.0},
-    "higher": {"slope": 0.0, "s_reference": 1.0},
+    "single": {"slope": -0.22543762945751064, "s_reference": 1.8066048248945341},
+    "higher": {"slope": -0.266999261887911, "s_reference": 1.7783766446107696},
 }
 #: the population's ranges (catalog/studies/wall-population.toml): name -> (low, high)
 SCOPE = {"thickness": (0.11, 0.47), "height": (2.5, 7.0), "slenderness": (0.0, 35.0),

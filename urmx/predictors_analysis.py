@@ -169,7 +169,8 @@ def resonance(pop: dict[str, Any], replicates: int = 200, seed: int = 37,
     Returns
     -------
     dict
-        Per storey: ``edges``, ``mean`` (per bin) and its ``lower``/``upper``; ``factor``
+        Per storey: ``edges``, ``mean`` (per bin) and its ``lower``/``upper``,
+        ``mean_adjusted`` (per bin, each record's mean e over the walls taken out); ``factor``
         the capacity factor ``exp(mean e)`` of the cells within `BAND` of resonance (the
         capacity in resonance over the wall's median) and its interval;
         ``factor_adjusted`` the same with each record's mean ``e`` over the walls taken
@@ -219,8 +220,11 @@ def _resonance_stats(c: dict[str, np.ndarray], edges: np.ndarray) -> dict[str, A
     s_rec = np.bincount(rec, weights=s) / np.maximum(np.bincount(rec), 1)
     sw = s - s_rec[rec]
     within = float(np.sum(sw * adjusted) / np.sum(sw * sw))
-    return {"mean": mean, "count": np.bincount(b[(b >= 0) & (b < len(edges) - 1)],
-                                               minlength=len(edges) - 1),
+    mean_adjusted = np.array([adjusted[b == i].mean() if np.any(b == i) else np.nan
+                              for i in range(len(edges) - 1)])
+    inside = b[(b >= 0) & (b < len(edges) - 1)]
+    return {"mean": mean, "mean_adjusted": mean_adjusted,
+            "count": np.bincount(inside, minlength=len(edges) - 1),
             "factor": float(math.exp(e[band].mean())),
             "factor_adjusted": float(math.exp(adjusted[band].mean())),
             "band_cells": int(band.sum()), "slope": slope, "slope_within": within,

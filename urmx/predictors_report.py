@@ -70,36 +70,41 @@ def analyse(ds, replicates: int = 200) -> dict[str, Any]:
 # ---- figures ------------------------------------------------------------------------------
 
 def _fig_capacity(a: dict[str, Any], out: Path) -> str:
-    """Median collapse PGA against h/t and the recommended single predictor, coloured by the
-    diaphragm frequency (rigid tops grey)."""
+    """Median collapse PGA against h/t, the static acceleration that starts rocking and the
+    recommended criterion's prediction, coloured by the diaphragm frequency (rigid tops
+    grey)."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
     pop = a["pop"]
-    names = ["slenderness"]
-    for storey in pa.STOREYS:
-        for n in a["rec"][storey, "pga"]["best_single"]["names"]:
-            if n not in names:
-                names.append(n)
-    fig, axes = plt.subplots(2, len(names), figsize=(4.2 * len(names), 7.5), squeeze=False)
+    fig, axes = plt.subplots(2, 3, figsize=(14, 8.5), squeeze=False, layout="constrained")
     for row, storey in enumerate(pa.STOREYS):
         st = pop["storey"] == storey
-        for col, n in enumerate(names):
+        rel = a["rec"][storey, "pga"]["recommended"]
+        fitted = np.exp(rel["intercept"] + sum(
+            b * np.log(pop[n] if n in pa.INPUTS else pop[f"p_{n}"])
+            for n, b in zip(rel["names"], rel["exponents"], strict=True)))
+        columns = [("h/t", pop["p_slenderness"]),
+                   (LABELS["static_acceleration"] + " [g]", pop["p_static_acceleration"] / 9.81),
+                   (f"recommended: {_power_law(rel)} [g]", fitted / 9.81)]
+        for col, (label, x) in enumerate(columns):
             ax = axes[row, col]
-            x = pop[n] if n in pa.INPUTS else pop[f"p_{n}"]
             rig = st & pop["rigid"]
-            ax.scatter(x[rig], pop["median_pga"][rig] / 9.81, c="0.6", s=10, label="rigid")
+            ax.scatter(x[rig], pop["median_pga"][rig] / 9.81, c="0.6", s=8, label="rigid top")
             fl = st & ~pop["rigid"]
-            sc = ax.scatter(x[fl], pop["median_pga"][fl] / 9.81, s=10, cmap="viridis",
+            sc = ax.scatter(x[fl], pop["median_pga"][fl] / 9.81, s=8, cmap="viridis",
                             c=pop["p_diaphragm_frequency"][fl], norm=LogNorm(0.8, 8.0))
+            if col == 2:
+                lim = [np.nanmin(fitted[fl]) / 9.81, np.nanmax(fitted[fl]) / 9.81]
+                ax.plot(lim, lim, c="k", lw=0.8, label="1:1")
             ax.set_xscale("log")
             ax.set_yscale("log")
-            ax.set_xlabel(LABELS.get(n, n))
-            ax.set_ylabel(f"median collapse PGA [g], {storey} storey")
-            ax.legend(loc="upper right", fontsize=7)
+            ax.set_xlabel(label, fontsize=8)
+            ax.set_ylabel(f"median collapse PGA [g], {storey} storey", fontsize=8)
+            ax.legend(loc="best", fontsize=7)
         fig.colorbar(sc, ax=axes[row, :].tolist(), label="diaphragm frequency [Hz]")
     name = "capacity-vs-predictors.png"
-    fig.savefig(out / name, dpi=110)
+    fig.savefig(out / name, dpi=100)
     plt.close(fig)
     return name
 
@@ -147,6 +152,7 @@ def _fig_resonance(a: dict[str, Any], out: Path) -> str:
     """The resonance data: the residual of each (wall, record) capacity against the log
     frequency ratio (binned means with intervals) and against Sa(T_d)/PGA (the rule)."""
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     fig, axes = plt.subplots(2, 2, figsize=(12, 8.5))
     for i, storey in enumerate(pa.STOREYS):
@@ -155,7 +161,10 @@ def _fig_resonance(a: dict[str, Any], out: Path) -> str:
         ax.scatter(np.exp(res["x"]), res["e"], s=2, c="0.75", rasterized=True)
         mid = np.exp(0.5 * (res["edges"][1:] + res["edges"][:-1]))
         ax.errorbar(mid, res["mean"], yerr=[res["mean"] - res["lower"],
-                                            res["upper"] - res["mean"]], fmt="o-", c="C3")
+                                            res["upper"] - res["mean"]], fmt="o-", c="C3",
+                    label="binned mean")
+        ax.plot(mid, res["mean_adjusted"], "s--", c="C0", ms=4,
+                label="each record's own mean taken out")
         ax.axvspan(1 / pa.BAND, pa.BAND, color="C1", alpha=0.2, label="resonance band")
         ax.set_xscale("log")
         ax.set_xlabel("record's dominant frequency / diaphragm frequency")
@@ -167,6 +176,7 @@ def _fig_resonance(a: dict[str, Any], out: Path) -> str:
         ax.plot(np.exp(s), res["slope"] * (s - res["s_mean"]), c="C3",
                 label=f"ln C/median = {res['slope']:.2f} ln(S / {math.exp(res['s_mean']):.2f})")
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("S = Sa(T_d) / PGA of the record")
         ax.legend(fontsize=7)
     fig.tight_layout()

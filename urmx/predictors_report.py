@@ -261,6 +261,20 @@ def _ranking_table(a: dict[str, Any], storey: str, top: int = 15) -> list[str]:
     return rows
 
 
+def _singles_table(a: dict[str, Any]) -> list[str]:
+    """Markdown rows: each predictor alone, its share per storey and measure."""
+    keys = [(s, m) for s in pa.STOREYS for m in pa.MEASURES]
+    rows = ["| predictor alone | " + " | ".join(f"{s}, {m}" for s, m in keys) + " |",
+            "|---|" + "---|" * len(keys)]
+    for name in pa.RANKED:
+        cells = []
+        for key in keys:
+            r = a["ranks"][key]
+            cells.append(_fmt_share(r, r.index((name,))))
+        rows.append(f"| {LABELS.get(name, name)} | " + " | ".join(cells) + " |")
+    return rows
+
+
 def _criterion_rows(a: dict[str, Any]) -> list[str]:
     rows = ["| storey | measure | recommended criterion | relation | residual dispersion | "
             "CV share [interval] | VIF | h/t: share, rank, dispersion |",
@@ -476,13 +490,19 @@ def _body(a: dict[str, Any], figs: list[str], replicates: int, seconds: float) -
              "lower bounds). Each predictor alone and every pair; the top 15 in PGA, h/t and "
              "the control q shown.",
              ""]
+    lines += ["### Each predictor alone", "", *_singles_table(a), ""]
     for storey in pa.STOREYS:
         lines += [f"### {storey.capitalize()} storey", "", *_ranking_table(a, storey), ""]
     lines += [f"![ranking]({figs[2]})", "", "## Recommended criterion", "",
               "The smallest set whose paired bootstrap difference from the best's share "
               "reaches 0 at 95 %; its power law fitted on all walls of the population, the "
               "residual dispersion the log standard deviation about it.", "",
-              *_criterion_rows(a), "", f"![capacity]({figs[1]})", "",
+              *_criterion_rows(a), "",
+              "Each relation takes its predictors in SI units (a_rock in m s-2, T_eff in s, "
+              "f_d in Hz, lengths in m) and gives the median capacity in g. By hand, for a "
+              "single-storey wall in PGA: compute a_rock = (M0_2 + (a1/a2) M0_1) / (m a1 / 2) "
+              "from Table I and T_eff (`urmx.fragility.rocking_period`), then C_50 from the "
+              "first row.", "", f"![capacity]({figs[1]})", "",
               "## Resonance", "",
               "Each (wall, record) capacity over the wall's median, ln(C / median), against "
               "the record's dominant frequency (Konno-Ohmachi smoothed Fourier peak) over the "

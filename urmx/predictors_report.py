@@ -355,6 +355,15 @@ def _findings(a: dict[str, Any]) -> list[str]:
     from .fragility.ranking import within
 
     lines = ["**Is h/t a suitable criterion on flexible diaphragms?**", ""]
+    verdicts = {k: within(r, r.index(("slenderness",))) for k, r in a["ranks"].items()}
+    picks = sorted({_label(a["rec"][k]["recommended"]["names"]) for k in a["ranks"]})
+    lines += [f"In short: h/t is within the uncertainty of the best criterion in "
+              f"{sum(verdicts.values())} of the {len(verdicts)} rankings (single and higher "
+              f"storey, capacity in PGA and in sa_avg); "
+              + ("it is **not adequate** on flexible diaphragms, and what replaces it is "
+                 if not any(verdicts.values()) else "where it falls short, the criterion is ")
+              + " or ".join(f"**{p}**" for p in picks) + " (below, by storey and measure).",
+              ""]
     for storey in pa.STOREYS:
         for im in pa.MEASURES:
             rec, r = a["rec"][storey, im], a["ranks"][storey, im]

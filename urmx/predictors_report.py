@@ -73,11 +73,12 @@ def _fig_capacity(a: dict[str, Any], out: Path) -> str:
     """Median collapse PGA against h/t, the static acceleration that starts rocking and the
     recommended criterion's prediction, coloured by the diaphragm frequency (rigid tops
     grey)."""
-    import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
+    from matplotlib.figure import Figure
 
     pop = a["pop"]
-    fig, axes = plt.subplots(2, 3, figsize=(14, 8.5), squeeze=False, layout="constrained")
+    fig = Figure(figsize=(14, 8.5), layout="constrained")
+    axes = fig.subplots(2, 3, squeeze=False)
     for row, storey in enumerate(pa.STOREYS):
         st = pop["storey"] == storey
         rel = a["rec"][storey, "pga"]["recommended"]
@@ -105,16 +106,16 @@ def _fig_capacity(a: dict[str, Any], out: Path) -> str:
         fig.colorbar(sc, ax=axes[row, :].tolist(), label="diaphragm frequency [Hz]")
     name = "capacity-vs-predictors.png"
     fig.savefig(out / name, dpi=100)
-    plt.close(fig)
     return name
 
 
 def _fig_ranking(a: dict[str, Any], out: Path, top: int = 15) -> str:
     """The ranking with its bootstrap intervals: the top sets and h/t, per storey and
     measure."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
-    fig, axes = plt.subplots(2, 2, figsize=(13, 10))
+    fig = Figure(figsize=(13, 10), layout="constrained")
+    axes = fig.subplots(2, 2)
     for (i, storey), (j, im) in ((s, m) for s in enumerate(pa.STOREYS)
                                  for m in enumerate(pa.MEASURES)):
         r, ax = a["ranks"][storey, im], axes[i, j]
@@ -135,10 +136,8 @@ def _fig_ranking(a: dict[str, Any], out: Path, top: int = 15) -> str:
         ax.set_xlabel(f"cross-validated share of var ln C ({im})")
         ax.set_title(f"{storey} storey, flexible diaphragms, {r.n} walls", fontsize=9)
         ax.axvline(0.0, color="0.7", lw=0.8)
-    fig.tight_layout()
     name = "ranking.png"
     fig.savefig(out / name, dpi=110)
-    plt.close(fig)
     return name
 
 
@@ -151,10 +150,11 @@ def pa_index(a: dict[str, Any], storey: str, im: str) -> int:
 def _fig_resonance(a: dict[str, Any], out: Path) -> str:
     """The resonance data: the residual of each (wall, record) capacity against the log
     frequency ratio (binned means with intervals) and against Sa(T_d)/PGA (the rule)."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
     from matplotlib.ticker import NullFormatter
 
-    fig, axes = plt.subplots(2, 2, figsize=(12, 8.5))
+    fig = Figure(figsize=(12, 8.5), layout="constrained")
+    axes = fig.subplots(2, 2)
     for i, storey in enumerate(pa.STOREYS):
         res = a["resonance"][storey]
         ax = axes[i, 0]
@@ -179,18 +179,17 @@ def _fig_resonance(a: dict[str, Any], out: Path) -> str:
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("S = Sa(T_d) / PGA of the record")
         ax.legend(fontsize=7)
-    fig.tight_layout()
     name = "resonance.png"
     fig.savefig(out / name, dpi=110)
-    plt.close(fig)
     return name
 
 
 def _fig_correlation(a: dict[str, Any], out: Path) -> str:
     """The design's correlation matrices (sampled inputs; log predictors)."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
-    fig, axes = plt.subplots(1, 2, figsize=(15, 6.5))
+    fig = Figure(figsize=(15, 6.5), layout="constrained")
+    axes = fig.subplots(1, 2)
     for ax, key in zip(axes, ("inputs", "predictors"), strict=True):
         c = a["corr"][key]
         im = ax.imshow(c["r"], vmin=-1, vmax=1, cmap="RdBu_r")
@@ -203,7 +202,6 @@ def _fig_correlation(a: dict[str, Any], out: Path) -> str:
     fig.colorbar(im, ax=axes.tolist())
     name = "correlation.png"
     fig.savefig(out / name, dpi=110)
-    plt.close(fig)
     return name
 
 

@@ -70,15 +70,20 @@ def test_c9_chatter_under_the_contact_law_is_found():
     (124 crack impacts instead of 130, unfavourable_fraction 0.2708 instead of 0.2697).
     The reference (which also fired a contact function sitting exactly at zero again at
     once, 31 crack impacts at one instant near 3.7576 s, before it searched for first
-    falls) agrees."""
+    falls) agrees. (Pinned again for t_rest = 0.01 s, issue 32: with v_rest = g_open/dt,
+    dt = 0.02 s, it had 130 crack impacts and unfavourable_fraction 0.2696855, which
+    t_rest = 0.02 s still gives.)"""
     wall = C9_SUPPORTS["rigid/flex"]
     ag, dt = elcentro()
     res = kernel.run(wall, ag[:301], dt, scale=0.6, impact="contact", max_log=3000)
     log = res["event_log"]
     crack = log[log[:, 1] == kernel.EV_CRACK_IMPACT, 0]
     assert np.count_nonzero((crack > 5.5438) & (crack < 5.5472)) == 6
-    assert (res["crack_impacts"], res["base_impacts"], res["holds"]) == (130, 15, 1)
-    assert res["unfavourable_fraction"] == pytest.approx(0.2696855, rel=1e-6)
+    assert (res["crack_impacts"], res["base_impacts"], res["holds"]) == (132, 15, 1)
+    assert res["unfavourable_fraction"] == pytest.approx(0.2696874, rel=1e-6)
+    old = kernel.run(wall, ag[:301], dt, scale=0.6, impact="contact", t_rest=dt)
+    assert (old["crack_impacts"], old["holds"]) == (130, 1)
+    assert old["unfavourable_fraction"] == pytest.approx(0.2696855, rel=1e-6)
     ref = reference.run(wall, ag[:301], dt, scale=0.6, impact="contact", rtol=1e-11)
     _agree(res, ref)
 
@@ -99,14 +104,24 @@ def test_both_sides_qualifying_release_the_current_familys_side():
     _agree(res, reference.run(w, ag, dt, cor=cor, tail=1.6))
 
 
+REF_TIGHT = 1e-12  # rtol of the reference run that checks its own convergence
+
+
 def _compare(case: dict) -> tuple:
-    """(support, impact law, holds, the kernel's own differences when the scale factor
-    moves by one unit in the last place, differences kernel - reference) of one random
+    """(support, impact law, holds, the sensitivity of the case: per output, the largest of
+    the kernel's own difference when the scale factor moves by one unit in the last place
+    and, where kernel and reference differ by more than TOL, the reference's own difference
+    between its tolerance and REF_TIGHT; differences kernel - reference) of one random
     case."""
     support = case.pop("support")
     a = kernel.run(**case)
     own = differences(a, kernel.run(**case, scale=np.nextafter(1.0, 2.0)))
-    return support, case["impact"], a["holds"], own, differences(a, reference.run(**case))
+    ref = reference.run(**case)
+    diff = differences(a, ref)
+    if max(diff.values()) > TOL:
+        yard = differences(ref, reference.run(**case, rtol=REF_TIGHT))
+        own = {k: max(own[k], yard[k]) for k in own}
+    return support, case["impact"], a["holds"], own, diff
 
 
 @pytest.mark.slow
@@ -119,7 +134,16 @@ def test_exact_agrees_with_reference_on_random_held_cases():
     that own change where it is larger (the hold decisions of a chaotic chatter flip on
     the last bit: counts of impacts and holds move by several per cent). At least 40 cases
     hold joints, some on every support case and law. Two processes (the reference takes
-    about 0.3 s a case)."""
+    about 0.3 s a case).
+
+    Since event times are polished to the last ulps (issue 32) the kernel's 1-ulp change
+    no longer reveals every chaotic chatter: in one case (a flexible base and a rigid top,
+    scale law, 47 holds) perturbations of event times grow about 1e4-fold in 20 impacts,
+    the kernel's 1-ulp change is 3.5e-9, yet the reference at its tolerance and at 1e-12
+    disagrees with itself by 20 % (unfavourable_fraction; 50 and 41 holds). Where kernel
+    and reference differ by more than 1e-6 the reference's own change between the two
+    tolerances is therefore part of the case's sensitivity too: a case whose yardstick is
+    not converged to 1e-6 is screened as chaotic."""
     rng = np.random.default_rng(SEED)
     cases = [held_case(rng) for _ in range(N_RANDOM)]
     with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as pool:

@@ -43,7 +43,14 @@ from typing import Any
 
 from .config import data_dir
 from .errors import MissingFileError, UrmxError
-from .model import EFFECTIVE_MASS, RIGID, Wall, effective_diaphragm_mass, effective_wall_mass
+from .model import (
+    EFFECTIVE_MASS,
+    RIGID,
+    T_REST,
+    Wall,
+    effective_diaphragm_mass,
+    effective_wall_mass,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -83,7 +90,7 @@ DIMS = ("wall", "diaphragm", "record", "cor", "scale", "impact", "damping")
 #: :func:`file_keys`). ``<wall id>`` and ``<record id>`` stand for keys that are ids.
 STUDY_FILE_KEYS: dict[str, tuple[str, ...]] = {
     "[study]": ("name", "title", "description", "walls", "diaphragms", "supports", "records",
-                "cor", "scale", "impact", "damping", "tail", "catalog"),
+                "cor", "scale", "impact", "damping", "tail", "t_rest", "catalog"),
     "[study.pairs]": ("<wall id>",),
     "[study.scale_factor]": ("<record id>",),
     "[[study.history]]": ("wall", "diaphragm", "record", "cor"),
@@ -668,6 +675,7 @@ class Study:
     extra: dict[str, list]  # added dimensions: scale, impact, damping
     impact: str = "scale"
     tail: float = 0.0
+    t_rest: float = T_REST  # v_rest = g_open/t_rest (MODEL.md section 4) [s]
     scale_factor: dict[str, float] = field(default_factory=dict)
     pairs: dict[str, list[str]] | None = None
     histories: list[History] = field(default_factory=list)
@@ -863,10 +871,14 @@ def load_study(path: str | os.PathLike, catalog: str | os.PathLike | None = None
     tail = s.get("tail", 0.0)
     if not _number(tail) or tail < 0:
         raise src.error("study.tail", f"{tail!r} must be a finite duration >= 0 [s]", "tail")
+    t_rest = s.get("t_rest", T_REST)
+    if not _number(t_rest) or not t_rest > 0:
+        raise src.error("study.t_rest", f"{t_rest!r} must be a finite time > 0 [s] (v_rest = "
+                        "g_open/t_rest)", "t_rest")
     study = Study(name=s.get("name", src.path.stem), title=s.get("title", s.get("name", "")),
                   path=src.path, text=src.text, catalog=cat, walls=walls,
                   diaphragms=diaphragms, supports=supports, records=records, cor=cor,
-                  extra=extra, impact=impact, tail=float(tail),
+                  extra=extra, impact=impact, tail=float(tail), t_rest=float(t_rest),
                   scale_factor=_scale_factors(src, s, records, own, groups),
                   pairs=_pairs(src, s, wall_ids, records, groups), own_supports=own_supports,
                   tables={k: s[k] for k in kinds.tables() if k in s},

@@ -21,7 +21,8 @@ time. Its solution is an entire function of time, so:
   its running peak, the exact solution on that sub-step is expanded in its Taylor series
   about the sub-step start. With ``nu*h <= 1`` the series converges to round-off in 10-30
   terms and the roots of event functions, their times, and the states there are found on
-  it by a bracketed Newton iteration that stops on the bracket width (TIME_TOL).
+  it by a bracketed Newton iteration that stops on the bracket width (TIME_TOL), and a
+  root is then polished to the last few ulps (:func:`_polish`).
   The state at an event is the series summed at the event time, not an interpolant.
 * A function at zero after an event (the joint that has just impacted, a joint released
   from a hold with gap, rate and acceleration zero, a branch boundary just crossed: its
@@ -47,7 +48,9 @@ the scipy reference solver in :mod:`urmx.reference`.
 
 Documented choices (MODEL.md section 4)
 ---------------------------------------
-* Event times are located to ``TIME_TOL = 1e-12 s`` (bracket width).
+* Event times are bracketed to ``TIME_TOL = 1e-12 s`` and then polished to the last few
+  ulps of the time (:func:`_polish`): an event's time is the root of its function's series
+  as round-off allows, not a point of the bracket that the search happened to leave.
 * Both joints start closed; a closed joint opens when ``|g|`` exceeds
   ``g_open = 1e-6 * theta_a(Case 2)``, taking the side of ``g``. A closed (or held) joint
   has no side of its own: whenever one joint opens, is released or changes side at an
@@ -55,7 +58,9 @@ Documented choices (MODEL.md section 4)
   family 2; family 1 needs both joints open. With a flexible base the side on which the
   wall departs is decided by high-order terms, and in a few percent of walls the result
   depends on this rule.
-* Held joints. A joint that an impact leaves with ``|g_d| < v_rest = g_open/dt`` is *held*
+* Held joints. A joint that an impact leaves with ``|g_d| < v_rest = g_open/t_rest`` (``t_rest``
+  a constant of the model, default ``T_REST = 0.01 s``, a setting; not the record step,
+  which made the answer depend on how finely the same motion is sampled) is *held*
   closed: its gap is kept at zero by a constraint (``theta1 = 0`` for the base joint,
   ``theta2 = theta1`` for the crack joint, one coordinate fewer; its small residual rate is
   removed by a perfectly plastic impulse), with the mass matrix and curves of the family
@@ -65,12 +70,13 @@ Documented choices (MODEL.md section 4)
   other joint is not open; when both sides qualify at once, the side whose family is the
   current one: :func:`release_tie`). A hold may last no time (released at once). While
   both families drive the gap back to zero (a sticking joint, which none of the four
-  patterns describes) it stays held. Physically: a joint that keeps closing faster than
-  the record can open it is closed until the opening rule opens it again. This ends Zeno
+  patterns describes) it stays held. Physically: a joint that an impact leaves slower than
+  it would open g_open in t_rest is closed until the opening rule opens it again. This ends Zeno
   chatter (impacts accumulating at a point) in a held joint instead of in the event bound.
 * Impacts closer than the window ``w`` (default 1e-6 s) are merged (section 7).
-* At most ``MAX_EVENTS_PER_STEP`` events in one record step; beyond that the run stops
-  with status ``event-limit`` (a guard against a hang; no catalog wall reaches it).
+* At most ``MAX_EVENTS`` (200) events in one span of ``EVENT_SPAN`` (0.01 s; spans from
+  t = 0, not record steps); beyond that the run stops with status ``event-limit`` (a guard
+  against a hang; no catalog wall reaches it).
 * Bounded work: the record step must lie in ``DT_RANGE`` (1e-6 to 1 s), and a support
   whose spring needs more than ``MAX_SUBSTEPS`` (1000) sub-steps a record step is refused
   when the wall's tables are built, with the advice to declare it rigid (1e9 N/m springs
@@ -105,6 +111,7 @@ from .model import (
     P_MDT,
     P_RIGID_B,
     P_RIGID_T,
+    T_REST,
     Wall,
     branch_coeffs,
     classify,
@@ -122,7 +129,10 @@ _INV2 = np.array([1.0 / (j + 2.0) for j in range(KMAX)])
 RHO = 1.0  # nu*h bound of a sub-step
 GATE = 0.05  # refine an interior extremum when the Hermite estimate is within 5 % of the peak
 TIME_TOL = 1e-12  # event time tolerance [s]
-MAX_EVENTS_PER_STEP = 200
+# the event bound: at most MAX_EVENTS events in one span of EVENT_SPAN seconds (spans of
+# fixed length from t = 0, not record steps: the bound does not depend on the sampling)
+MAX_EVENTS = 200
+EVENT_SPAN = 0.01  # [s]
 WINDOW = 1e-6  # merged-impact window w [s]
 DT_RANGE = (1e-6, 1.0)  # record steps the kernel accepts [s]
 # most sub-steps a record step may need: a support whose spring needs more is refused
@@ -193,8 +203,8 @@ ARRAYS = (
 # _march's parameters in order: names of ARRAYS, of the integer arguments (INTS; want_hist
 # a boolean) and of the real ones (REALS), and tuples of array names (passed as tuples)
 INTS = ("ntail", "law", "want_hist")
-REALS = ("dt", "cor", "window")
-LOOP_ARGS = ("P", "ag", "dt", "ntail", "cor", "law", "window",
+REALS = ("dt", "cor", "window", "t_rest")
+LOOP_ARGS = ("P", "ag", "dt", "ntail", "cor", "law", "window", "t_rest",
              tuple(x[0] for x in ARRAYS[2:9]), tuple(x[0] for x in ARRAYS[9:16]),
              tuple(x[0] for x in ARRAYS[16:47]), "peaks", "outs", "hist", "want_hist",
              "evlog")
@@ -859,12 +869,55 @@ def _peval1(cf, m, s):
     return e + s * o, 2.0 * s * de + o + 2.0 * u * do
 
 
+EPS = 2.220446049250313e-16
+
+
+@inner
+def _polish(cf, m, a, b, x, steps):
+    """The root of a polynomial in a bracket (a, b) of :func:`_newton` (positive at a, at
+    or below zero at b) to the last few ulps of s, from x: the point of a Newton step of
+    less than half the bracket's tolerance (steps = 0: Newton's iteration converges
+    quadratically, so x is the root to round-off, whatever path the bracket took), or
+    any point of a bracket that closed first (then up to `steps` Newton steps, until one
+    is within 4 ulps of 1 or stops shrinking: round-off). If the polynomial has not
+    crossed there yet, steps towards b, from twice the distance Newton's step gives (at
+    least an ulp) and doubling, find the crossed point next to it. So an event's time is a
+    function of its series, not of the bracket (whose width, 1e-12 s, made event times
+    jitter by about 1e-13 s from run to run of nearly identical inputs, which chatter
+    amplifies). Returns (a, x), p(x) <= 0."""
+    x = min(max(x, a), b)
+    p, dp = _peval1(cf, m, x)
+    last = np.inf
+    for _ in range(steps):
+        if p == 0.0 or dp == 0.0:
+            break
+        xn = min(max(x - p / dp, a), b)
+        step = abs(xn - x)
+        if step <= 4.0 * EPS or step >= last:
+            break
+        last = step
+        x = xn
+        p, dp = _peval1(cf, m, x)
+    d = max(EPS * abs(x) + 5e-324, -2.0 * p / dp if dp < 0.0 else 0.0)
+    for _ in range(64):
+        if p <= 0.0:
+            return a, x
+        x = x + d
+        d *= 2.0
+        if x >= b:
+            break
+        p = _peval1(cf, m, x)[0]
+    return a, b
+
+
 @inner
 def _newton(cf, m, lo, hi, tol, guess, order):
     """Bracketed Newton for a sign change of the polynomial (order 0, positive at lo, on
     value and slope by :func:`_peval1`) or of its slope (order 1, an extremum, on slope
     and curvature by :func:`_peval`) over [lo, hi]; stops on the bracket width. Returns
-    (a, b), |b - a| <= tol: the function has at a the sign it has at lo, at b the other."""
+    (a, b), |b - a| <= tol: the function has at a the sign it has at lo, at b the other.
+    A root (order 0) is instead polished to the last few ulps once a Newton step is below
+    the tolerance (:func:`_polish`), b the polished crossed point."""
     # oriented f: negative on the lo side
     if order == 0:
         orient = -1.0
@@ -872,6 +925,7 @@ def _newton(cf, m, lo, hi, tol, guess, order):
         orient = 1.0 if _peval(cf, m, lo)[1] < 0.0 else -1.0
     a, b = lo, hi
     x = guess if lo < guess < hi else 0.5 * (lo + hi)
+    xn = x
     for _ in range(100):
         if order == 0:
             v, dv = _peval1(cf, m, x)
@@ -885,15 +939,20 @@ def _newton(cf, m, lo, hi, tol, guess, order):
             a = x
         else:
             b = x
-        if b - a <= tol:
-            break
         xn = x - f / df if df != 0.0 else 0.5 * (a + b)
         if not (a < xn < b):
             xn = 0.5 * (a + b)
-        if abs(xn - x) < 0.5 * tol:  # close the bracket from the other side
+        if b - a <= tol:
+            break
+        if abs(xn - x) < 0.5 * tol:
+            if order == 0:  # converged: to the last ulps from Newton's point
+                return _polish(cf, m, a, b, xn, 0)
+            # close the bracket from the other side
             xn = x + 0.5 * tol if f < 0.0 else x - 0.5 * tol
             xn = min(max(xn, a), b)
         x = xn
+    if order == 0:  # (the bracket closed before a Newton step was that short)
+        return _polish(cf, m, a, b, xn, 3)
     return a, b
 
 
@@ -1340,7 +1399,7 @@ def record_row(hist, k, L, N, ist, r, v, val, nfull):
 
 
 @inner
-def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, hist,
+def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks, outs, hist,
            want_hist, evlog):
     """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
 
@@ -1363,7 +1422,7 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     N = ag.shape[0]
     nsteps = N - 1 + ntail
     g_open = G_OPEN_FACTOR * curve(P, 2)[3]  # theta_a of Case 2
-    v_rest = g_open / dt
+    v_rest = g_open / t_rest  # a constant of the model, not the record step
     inv_dt = 1.0 / dt  # a product per step instead of a division (its latency showed)
     # start: at rest, family 2, provisional sides against the first ground motion
     first = 0.0
@@ -1420,6 +1479,8 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
     done = False
     beta_prev = beta0
     near = 0  # bit k: event function k may have just left zero (set at events)
+    ev_here = 0  # events in the current span of EVENT_SPAN seconds, which ends at span_end
+    span_end = -1.0
     for step in range(nsteps):
         if step < N - 1:
             alpha = ag[step]
@@ -1429,7 +1490,6 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
             beta = 0.0
         t0 = step * dt
         tau = 0.0
-        ev_here = 0
         # the rates of the absolute accelerations jump with the slope of the record:
         # d(rate)/d(beta) = 1 - row . M^-1 G (values and other rates are continuous);
         # so do the rates of release functions (their ground term)
@@ -1577,8 +1637,11 @@ def _march(P, ag, dt, ntail, cor, law, window, geo, pieces, work, peaks, outs, h
                     evlog[n_events, 1] = kind[k_ev]
                     evlog[n_events, 2] = tgt[k_ev]
                 n_events += 1
+                if t0 + tau >= span_end:  # a new span (t >= 0: int() is floor)
+                    span_end = (int((t0 + tau) * (1.0 / EVENT_SPAN)) + 1) * EVENT_SPAN
+                    ev_here = 0
                 ev_here += 1
-                if ev_here > MAX_EVENTS_PER_STEP:
+                if ev_here > MAX_EVENTS:
                     status = ST_EVENT_LIMIT
                     break
                 code = handle_event(P, GL, GX, GMI, GROT, ist, kind[k_ev], tgt[k_ev], r, v,
@@ -2016,8 +2079,22 @@ def clear_cache() -> None:
     _TABLES.clear()
 
 
-def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window=WINDOW):
+def check_t_rest(t_rest) -> float:
+    """`t_rest` as a float, or an InputError naming it (a positive, finite time)."""
+    try:
+        value = float(t_rest)
+    except (TypeError, ValueError):
+        raise InputError(f"t_rest={t_rest!r} must be a number of seconds") from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise InputError(f"t_rest={t_rest!r} must be a positive, finite time in seconds "
+                         f"(v_rest = g_open/t_rest, MODEL.md section 4)")
+    return value
+
+
+def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window=WINDOW,
+                 t_rest=T_REST):
     """Validate the arguments shared by every solver; returns (ag, dt, ntail, law)."""
+    check_t_rest(t_rest)
     if not isinstance(wall, Wall):
         raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
     try:
@@ -2116,7 +2193,7 @@ _NO_RECORD = np.zeros(1)  # the record's slot until an analysis writes its own
 
 def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: float = 0.8,
         impact: str = "scale", tail: float = 0.0, window: float = WINDOW,
-        history: bool = False, max_log: int = 0) -> dict:
+        t_rest: float = T_REST, history: bool = False, max_log: int = 0) -> dict:
     """One analysis with the exact kernel: the array-level entry point studies call.
 
     Parameters
@@ -2137,6 +2214,10 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
         Free-vibration tail after the record, rounded to whole steps. [s]
     window : float
         Merged-impact window w. [s]
+    t_rest : float
+        A joint that an impact leaves with a rate below ``v_rest = g_open/t_rest`` is held
+        closed (MODEL.md section 4); a constant of the model, not the record step: the
+        answer does not depend on how finely the record is sampled. [s]
     history : bool
         Also return the histories on the record grid under ``"history"``.
     max_log : int
@@ -2152,7 +2233,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
         ``holds`` (joints held closed after an impact).
     """
     ag, dt, ntail, law = check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail,
-                                      window)
+                                      window, t_rest)
     tab = tables(wall, dt)
     n = tab.nfull
     args = tab.args
@@ -2166,7 +2247,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
             if evlog is not None:
                 args.put("evlog", evlog)
             while True:
-                status = args.run(ag, (ntail, law, int(history)), (cor, window))
+                status = args.run(ag, (ntail, law, int(history)), (cor, window, float(t_rest)))
                 if status != ST_NEED_PIECE:
                     break
                 # a piece not foreseen as reachable: add it, run again

@@ -28,6 +28,10 @@ from .jitcache import jit
 PAPER_G = 9.81  # m s-2, the paper's gravity (Table III; MODEL.md section 1); not standard
 # gravity (urmx.records.STANDARD_GRAVITY = 9.80665, for records given in g)
 RIGID = "rigid"
+# t_rest of the rest rule v_rest = g_open/t_rest (MODEL.md section 4): a joint that an impact
+# leaves slower than v_rest is held closed. A constant of the model and a setting
+# (urmx.kernel.run, urmx.simulate, a study's t_rest), not the record step. [s]
+T_REST = 0.01
 EFFECTIVE_MASS = 8.0 / 15.0  # Eq. 7: effective over nominal mass of building walls and diaphragms
 
 

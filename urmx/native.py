@@ -79,7 +79,7 @@ class Args:
                              f"(missing: {missing})")
         n = len(self.layout)
         self.iv = np.zeros(n * SLOT + 3, np.int64)
-        self.fv = np.zeros(3)
+        self.fv = np.zeros(len(loop.reals))
         self.fv[0] = dt
         self._arrays: dict = {}
         for name, a in arrays.items():
@@ -125,7 +125,9 @@ class Args:
         iv[at + 1] = record.shape[0]  # (the caller keeps the record alive during the run)
         n = self._n
         iv[n], iv[n + 1], iv[n + 2] = ints
-        self.fv[1], self.fv[2] = reals
+        fv = self.fv
+        for i, x in enumerate(reals, 1):
+            fv[i] = x
         status = fn(*self._ptrs)
         if status < 0:  # numba's error status: the loop raises nothing
             raise RuntimeError("the native kernel reported an error status")

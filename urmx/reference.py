@@ -136,12 +136,14 @@ def _extrema(t, val, der, peaks, at):
 
 
 def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
-        window=K.WINDOW, rtol=1e-10, atol=None, method="DOP853", max_step=None,
-        history=False) -> dict:
+        window=K.WINDOW, t_rest=K.T_REST, rtol=1e-10, atol=None, method="DOP853",
+        max_step=None, history=False) -> dict:
     """One analysis with scipy's ``solve_ivp`` (same outputs as :func:`urmx.kernel.run`).
 
     Parameters
     ----------
+    t_rest : float
+        ``v_rest = g_open/t_rest``, as in :func:`urmx.kernel.run`. [s]
     rtol : float
         Relative tolerance of ``solve_ivp``. [1]
     atol : float, optional
@@ -153,7 +155,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         extrema are searched at least every dt/128). [s]
     """
     ag, dt, ntail, law = K.check_inputs(wall, ground_acceleration, dt, scale, cor, impact,
-                                        tail, window)
+                                        tail, window, t_rest)
     if not (rtol and 0.0 < float(rtol) < 1.0):
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
     tab = K.tables(wall, dt)
@@ -163,7 +165,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     N = ag.size
     nsteps = N - 1 + ntail
     g_open = K.G_OPEN_FACTOR * wall.segment(2).theta_a
-    v_rest = g_open / dt
+    v_rest = g_open / float(t_rest)
     if atol is None:
         atol = rtol * 1e-3 * wall.segment(2).theta_a
     max_step = dt / 8.0 if max_step is None else float(max_step)
@@ -233,11 +235,11 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
     if history:
         record(0, r, v, ag[0])
     duration = nsteps * dt
+    span, ev_here = -1, 0  # the event bound: events in one span of K.EVENT_SPAN seconds
     for step in range(nsteps):
         alpha, beta = (ag[step], (ag[step + 1] - ag[step]) / dt) if step < N - 1 else (0., 0.)
         t0 = step * dt
         tau = 0.0
-        ev_here = 0
         while tau < dt and status == K.ST_OK:
             n, mid, mode, padded, TR, L = piece()
             MK, MC, MR, MG = mode
@@ -290,8 +292,11 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
             while k_ev >= 0:
                 log.append((t0 + tau, kind[k_ev], tgt[k_ev]))
                 events += 1
+                sp = int(np.floor((t0 + tau) / K.EVENT_SPAN))
+                if sp != span:
+                    span, ev_here = sp, 0
                 ev_here += 1
-                if ev_here > K.MAX_EVENTS_PER_STEP:
+                if ev_here > K.MAX_EVENTS:
                     status = K.ST_EVENT_LIMIT
                     break
                 rp, vp = _pad(r), _pad(v)

@@ -21,7 +21,7 @@ import xarray as xr
 
 from . import __version__, provenance, variables
 from .errors import InputError
-from .model import Wall
+from .model import T_REST, Wall
 
 METHODS = ("exact", "reference")
 DEFAULT_RTOL = 1e-10  # relative tolerance of the reference method
@@ -64,7 +64,7 @@ def _record(ground_acceleration: Any, dt: float | None) -> tuple[Any, float | No
 
 def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
              scale: float = 1.0, cor: float = 0.8, impact: str = "scale", tail: float = 0.0,
-             history: bool = False, method: str = "exact",
+             t_rest: float = T_REST, history: bool = False, method: str = "exact",
              rtol: float | None = None) -> xr.Dataset:
     """Rocking response of one wall to one ground motion, as a labelled Dataset.
 
@@ -87,6 +87,10 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
         Impact law (MODEL.md section 8).
     tail : float
         Free-vibration tail after the record, rounded to whole record steps. [s]
+    t_rest : float
+        A joint that an impact leaves with a rate below ``v_rest = g_open/t_rest`` is held
+        closed (MODEL.md section 4): a constant of the model, recorded as the attribute
+        ``t_rest``, not the record step. [s]
     history : bool
         Add the time histories over a ``time`` dimension on the record grid.
     method : {"exact", "reference"}
@@ -105,7 +109,8 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
         ``top_acceleration``, ``pattern`` (11, 12, 21, 22; 0 after a stop) and the
         analysed ``ground_acceleration`` (scaled, zero in the tail) over ``time``.
         Global attributes: ``status`` ("ok", "collapsed", "event-limit"), ``duration``
-        [s], ``events``, ``method``, ``cor``, ``scale``, ``impact``, ``tail``, ``dt``,
+        [s], ``events``, ``method``, ``cor``, ``scale``, ``impact``, ``tail``, ``t_rest``,
+        ``dt``,
         the provenance attributes of `urmx.provenance.attrs` (``urmx_version`` with the
         git commit, ``kernel_source_hash``, library versions) and the wall's fields as
         ``wall_<field>``.
@@ -131,10 +136,12 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
     samples, dt, source = _record(ground_acceleration, dt)
     try:
-        check_inputs(wall, samples, dt, scale, cor, impact, tail)
+        check_inputs(wall, samples, dt, scale, cor, impact, tail, t_rest=t_rest)
     except ValueError as exc:  # the solvers' own argument checks
         raise InputError(str(exc)) from None
-    options = dict(scale=scale, cor=cor, impact=impact, tail=tail, history=history)
+    t_rest = float(t_rest)
+    options = dict(scale=scale, cor=cor, impact=impact, tail=tail, t_rest=t_rest,
+                   history=history)
     if method == "exact":
         from .kernel import run
 
@@ -161,12 +168,13 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
         data["ground_acceleration"] = ("time", ag)
     ds = xr.Dataset(data, coords=coords)
     ds.attrs = _attrs(wall, res, method=method, rtol=rtol, dt=float(dt), scale=scale,
-                      cor=cor, impact=impact, tail=tail, source=source)
+                      cor=cor, impact=impact, tail=tail, t_rest=t_rest, source=source)
     return variables.stamp(ds)
 
 
 def _attrs(wall: Wall, res: dict, *, method: str, rtol: float | None, dt: float,
-           scale: float, cor: float, impact: str, tail: float, source: str) -> dict:
+           scale: float, cor: float, impact: str, tail: float, t_rest: float,
+           source: str) -> dict:
     """netCDF-safe global attributes (strings and numbers only)."""
     attrs: dict[str, Any] = {
         "Conventions": "CF-1.8",
@@ -179,10 +187,10 @@ def _attrs(wall: Wall, res: dict, *, method: str, rtol: float | None, dt: float,
     if rtol is not None:
         attrs["rtol"] = float(rtol)
     attrs.update(dt=dt, scale=float(scale), cor=float(cor), impact=impact, tail=float(tail),
-                 record=source)
+                 t_rest=t_rest, record=source)
     attrs.update(provenance.attrs())  # urmx_version (with the git commit), versions
     for key, value in wall.to_dict().items():
         attrs[f"wall_{key}"] = value if isinstance(value, str) else float(value)
     attrs["history"] = (f"urmx {__version__} simulate(method={method!r}, scale={scale:g}, "
-                        f"cor={cor:g}, impact={impact!r}, tail={tail:g})")
+                        f"cor={cor:g}, impact={impact!r}, tail={tail:g}, t_rest={t_rest:g})")
     return attrs

@@ -9,7 +9,10 @@ hash of everything that decides its result:
   diaphragm's stiffness, damping, the supports it makes and the building's diaphragm mass;
   the record's samples (their digest), time step and scale factor; the value itself for cor,
   scale, impact, damping and any other dimension (a kind may say more, ``Kind.identity``);
-- once per study: the kind's name and settings, the study's tail and default impact law,
+- once per study: the kind's name and settings, the study's tail, ``t_rest`` (the rest time
+  of held joints, MODEL.md section 4; left out at its default, so that keys made before it
+  stay: a cell run under another t_rest never has the key of one run under the default)
+  and default impact law,
   the kernel's name, `urmx.jitcache.SOURCE_HASH` and the urmx version;
 - whether the kind keeps extra arrays for the cell (``Kind.extras``: a grid's kept time
   histories), so that a cell computed without them is not taken for one with them.
@@ -32,6 +35,8 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
+
+from ..model import T_REST
 
 _C1, _C2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
 _S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
@@ -124,6 +129,8 @@ class Cells:
                 "impact": None if "impact" in self.dims else study.impact,
                 "dims": self.names, "kernel": kernel_name(kernel), "urmx": __version__,
                 "kernel_source": jitcache.SOURCE_HASH}
+        if study.t_rest != T_REST:  # (the default left out: keys made before it stay)
+            base["t_rest"] = study.t_rest
         self.base = np.array([digest64(base)], dtype=np.uint64)
         self.extras = self._extras()
         self.record_axis = self.names.index("record")

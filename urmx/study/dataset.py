@@ -58,7 +58,8 @@ def coord(name: str, dims: Any, values: Any) -> xr.Variable:
 def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any]:
     """Global attributes of a study archive, shared by every study kind: title, CF
     convention, ``history`` (the time `started`, the urmx version, the `command`), the study
-    (``study_name``, ``study``: the study file's text) and how it was made
+    (``study_name``, ``study``: the study file's text; ``t_rest``, the rest time of held
+    joints, MODEL.md section 4) and how it was made
     (`urmx.provenance.attrs`: ``urmx_version`` with the git commit, ``urmx_git_commit``,
     ``urmx_git_dirty``, ``kernel_source_hash`` and the Python and library versions)."""
     from .. import __version__
@@ -71,6 +72,7 @@ def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any
         "history": f"{started} urmx {__version__}: {cmd}",
         "study_name": study.name,
         "study": study.text,
+        "t_rest": float(study.t_rest),
         "source": "urmx: exact event-driven rocking of cracked URM walls (MODEL.md)",
         **attrs(),
     }

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import variables
+from ...model import T_REST
 from ...netcdf import INT_FILL  # the integer outputs' _FillValue on disk
 from ..batches import Batch
 from ..dataset import MISSING, NOT_RUN, STATUS, VALID
@@ -60,7 +61,8 @@ def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> di
         cor=[study.cor[i] for i in b["cor"]],
         scale=[study.extra["scale"][i] for i in b["scale"]] if "scale" in b else [1.0],
         impact=[study.extra["impact"][i] for i in b["impact"]] if "impact" in b
-        else [study.impact], tail=study.tail, history=hist, kernel=kernel, shape=batch.shape)
+        else [study.impact], tail=study.tail, t_rest=study.t_rest, history=hist, kernel=kernel,
+        shape=batch.shape)
 
 
 def _unrun(shape) -> dict[str, np.ndarray]:
@@ -74,6 +76,14 @@ def _unrun(shape) -> dict[str, np.ndarray]:
             out[name] = np.full(shape, np.nan)
     out["status"] = np.full(shape, NOT_RUN, dtype=np.int8)
     return out
+
+
+def rest_time(task: dict[str, Any]) -> dict[str, float]:
+    """The kernel's ``t_rest`` argument for a task's cells: given only when the study sets
+    another than the default (`urmx.model.T_REST`), so that an integrator with the
+    interface of `urmx.kernel.run` before it had ``t_rest`` (a stand-in) still serves."""
+    t_rest = task.get("t_rest", T_REST)
+    return {} if t_rest == T_REST else {"t_rest": t_rest}
 
 
 def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.ndarray]:
@@ -90,7 +100,7 @@ def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.nd
     kept = set(task["history"])
     for n, (iw, idp, ic, isc, ii, iz) in enumerate(np.ndindex(*shape)):
         kw = dict(scale=task["scale_factor"] * task["scale"][isc], cor=task["cor"][ic],
-                  impact=task["impact"][ii], tail=task["tail"])
+                  impact=task["impact"][ii], tail=task["tail"], **rest_time(task))
         if n in kept:
             kw["history"] = True
         result = kernel(walls[iw][idp][iz], acceleration, task["dt"], **kw)

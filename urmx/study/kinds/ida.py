@@ -23,6 +23,7 @@ bootstrap intervals of the fits (``median_collapse_intensity_lower`` / ``_upper`
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -34,6 +35,7 @@ from ... import fragility, variables
 from ...netcdf import INT_FILL
 from ...records.measures import dominant_frequency
 from ..batches import Batch
+from . import grid
 from .kind import Kind
 
 if TYPE_CHECKING:
@@ -172,7 +174,7 @@ def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> di
                         for idp in b["diaphragm"]] for iw in b["wall"]],
                 dt=rec.dt, scale_factor=rec.scale_factor, record=rec.digest,
                 cor=[study.cor[i] for i in b["cor"]], impact=study.impact,
-                ida=study.settings.to_dict(), kernel=kernel)
+                ida=study.settings.to_dict(), kernel=kernel, t_rest=study.t_rest)
 
 
 _PREDOMINANT: dict[tuple, float] = {}  # a worker's predominant frequencies, by record
@@ -196,6 +198,9 @@ def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
     kernel = task["kernel"]
     if kernel is None:
         from ...kernel import run as kernel
+    rest = grid.rest_time(task)
+    if rest:
+        kernel = functools.partial(kernel, **rest)
     acc = np.ascontiguousarray(acceleration * task["scale_factor"], dtype=np.float64)
     ida, dt = task["ida"], task["dt"]
     walls = [w for row in task["walls"] for w in row]

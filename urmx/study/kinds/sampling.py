@@ -187,11 +187,12 @@ def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> di
             per_sample.append(dict(
                 walls=[[[w] for w in row] for row in cells], dt=rec.dt,
                 scale_factor=rec.scale_factor, cor=[cor], scale=[1.0], impact=[law],
-                tail=study.tail, history=[], kernel=kernel,
+                tail=study.tail, t_rest=study.t_rest, history=[], kernel=kernel,
                 shape=(len(b["wall"]), len(b["diaphragm"]), 1, 1)))
         else:
             per_sample.append(dict(walls=cells, dt=rec.dt, scale_factor=rec.scale_factor,
                                    record=rec.digest, cor=[cor], impact=law,
+                                   t_rest=study.t_rest,
                                    ida=settings.ida.to_dict(), kernel=kernel))
     return {"samples": per_sample, "ida": settings.ida is not None}
 

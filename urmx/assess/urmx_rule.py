@@ -47,9 +47,9 @@ SOURCE = ("urmx wall-population study (issue 37), reports/predictors/REPORT.md: 
 #: ``relations["<storey>/pga/recommended"]``): ln C_50 = intercept + sum b ln x [m s-2]
 RELATIONS: dict[str, dict] = {
     "single": {"predictors": ["static_acceleration", "effective_period"],
-               "intercept": 0.4064599029551148,
-               "exponents": [0.8960312696407047, 0.9742028758028852],
-               "dispersion": 0.11720989768922803},
+               "intercept": 0.4059809559180881,
+               "exponents": [0.8962250402885564, 0.9749207895658785],
+               "dispersion": 0.11755047919044556},
     "higher": {"predictors": ["static_acceleration", "effective_period"],
                "intercept": 0.2621392142609747,
                "exponents": [0.8989782262447095, 0.9598541834994312],
@@ -57,7 +57,7 @@ RELATIONS: dict[str, dict] = {
 }
 #: storey -> resonance slope c and S_ref (numbers.json ``resonance["<storey>"]``)
 RESONANCE: dict[str, dict] = {
-    "single": {"slope": -0.22543762945751064, "s_reference": 1.8066048248945341},
+    "single": {"slope": -0.22530805715281768, "s_reference": 1.8066048248945341},
     "higher": {"slope": -0.266999261887911, "s_reference": 1.7783766446107696},
 }
 #: the population's ranges (catalog/studies/wall-population.toml): name -> (low, high)

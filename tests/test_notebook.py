@@ -89,3 +89,20 @@ def test_own_study_notebook_runs(records_dir, tmp_path, monkeypatch):
                for c in nb.cells for o in c.get("outputs", []))  # the figure
     docs = OWN_STUDY.parent
     assert not list(docs.glob("*.nc")) and not list(docs.glob("*.toml"))  # nothing in docs/
+
+
+def test_predictors_notebook_runs(records_dir, tmp_path, monkeypatch):
+    """docs/predictors.ipynb (issue 37) on its small wall population: the design, one
+    wall's predictors, the run, the ranking, the report and urmx_rule."""
+    record_file("library/catalog.tsv")
+    nb, joined = _execute(NOTEBOOK.parent / "predictors.ipynb", records_dir, tmp_path,
+                          monkeypatch)
+    assert "walls drawn: 40" in joined and "h/t <= 35: True" in joined
+    assert "static_acceleration" in joined and "effective_period" in joined
+    assert "capacities: 80 |" in joined
+    assert "predictor_slenderness" in joined and "predictor_frequency_ratio" in joined
+    assert "single pga" in joined and "recommended" in joined
+    assert "REPORT.md" in joined and "numbers.json" in joined
+    assert "registered: True" in joined and "urmx_rule:" in joined
+    assert any(o.output_type == "display_data" and "image/png" in o.get("data", {})
+               for c in nb.cells for o in c.get("outputs", []))

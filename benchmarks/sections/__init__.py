@@ -28,11 +28,12 @@ from . import (
     startup,
     statuses,
     uncertainty,
+    wall_population,
     work_precision,
 )
 
 SECTIONS = [kernel, work_precision, cost_growth, grid_scaling, paper, hard_cases, guard,
-            fragility, statuses, startup, opensees, uncertainty, scale]
+            fragility, statuses, startup, opensees, uncertainty, scale, wall_population]
 
 #: names on the command line that run several sections
 GROUPS = {

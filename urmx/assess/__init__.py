@@ -68,14 +68,16 @@ from .asce41_ht import asce41_ht  # noqa: E402 (the registry first)
 from .doherty import doherty  # noqa: E402
 from .ntc_kinematic import ntc_kinematic  # noqa: E402
 from .nzsee_c8 import nzsee_c8  # noqa: E402
+from .urmx_rule import urmx_rule  # noqa: E402
 
 register("nzsee_c8", nzsee_c8)
 register("asce41_ht", asce41_ht)
 register("ntc_kinematic", ntc_kinematic)
 register("doherty", doherty)
+register("urmx_rule", urmx_rule)  # urmx's own rule (issue 37, urmx.assess.urmx_rule)
 
 from .compare import compare  # noqa: E402 (iterates the registry above)
 
 __all__ = ["PROCEDURES", "Assessment", "DesignSpectrum", "NotApplicable", "Position", "Quantity",
            "RecordDemand", "asce41_ht", "compare", "doherty", "ntc_kinematic", "nzsee_c8",
-           "position_of", "record_demand", "register"]
+           "position_of", "record_demand", "register", "urmx_rule"]

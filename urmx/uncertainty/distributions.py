@@ -1,6 +1,7 @@
 """The distributions a sampling study draws its model parameters from, as given in a study
-file (``uniform``, ``normal``, ``lognormal``, ``choice``): parsed and validated from their
-TOML tables, and mapped from points of the unit interval to values (``ppf``).
+file (``uniform``, ``normal``, ``lognormal``, ``choice``, ``loguniform``,
+``bernoulli``): parsed and validated from their TOML tables, and mapped from points of the
+unit interval to values (``ppf``).
 
 A distribution is a table ``{ distribution = NAME, ... }`` with exactly the keys of its
 kind:
@@ -15,6 +16,9 @@ distribution   keys                                         draws
                ``high``                                     truncated to [low, high]
 ``choice``     ``values`` (a list)                          each value with the same
                                                             probability
+``loguniform`` ``low``, ``high`` (both above 0)             exp(uniform on [ln low,
+                                                            ln high])
+``bernoulli``  ``p`` (in [0, 1])                            1 with probability p, else 0
 =============  ===========================================  ============================
 
 Each sample is drawn as a point ``u`` of the unit interval (the sampler's Latin hypercube,
@@ -39,6 +43,8 @@ KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "normal": (("mean", "std"), ("low", "high")),
     "lognormal": (("median", "beta"), ("low", "high")),
     "choice": (("values",), ()),
+    "loguniform": (("low", "high"), ()),
+    "bernoulli": (("p",), ()),
 }
 
 
@@ -58,11 +64,13 @@ class Distribution:
     Parameters
     ----------
     kind : str
-        ``uniform``, ``normal``, ``lognormal`` or ``choice``.
+        ``uniform``, ``normal``, ``lognormal``, ``choice``, ``loguniform`` or
+        ``bernoulli``.
     args : tuple
         The kind's numbers, in `KEYS` order: (low, high); (mean, std, low, high);
         (median, beta, low, high), with -inf/inf (0/inf for a lognormal) where no
-        truncation is given; or, for ``choice``, the values.
+        truncation is given; or, for ``choice``, the values; (low, high) of a
+        ``loguniform``, (p,) of a ``bernoulli``.
     """
 
     kind: str
@@ -74,6 +82,8 @@ class Distribution:
         if self.kind == "choice":
             nums = [v for v in self.args if not isinstance(v, str)]
             return (min(nums), max(nums)) if len(nums) == len(self.args) else (None, None)
+        if self.kind == "bernoulli":
+            return 0.0, 1.0
         return self.args[-2], self.args[-1]
 
     @property
@@ -102,6 +112,11 @@ class Distribution:
         if self.kind == "uniform":
             low, high = self.args
             return low + u * (high - low)
+        if self.kind == "loguniform":
+            low, high = self.args
+            return np.exp(math.log(low) + u * (math.log(high) - math.log(low)))
+        if self.kind == "bernoulli":
+            return (u < self.args[0]).astype(np.float64)
         from scipy.stats import norm
 
         if self.kind == "normal":
@@ -123,6 +138,10 @@ class Distribution:
         if self.kind == "uniform":
             low, high = self.args
             return stats.uniform(low, high - low)
+        if self.kind == "loguniform":
+            return stats.loguniform(*self.args)
+        if self.kind == "bernoulli":
+            raise InputError("a bernoulli has no continuous distribution")
         if self.kind == "normal":
             mean, std, low, high = self.args
             return stats.truncnorm((low - mean) / std, (high - mean) / std, mean, std)
@@ -140,6 +159,10 @@ class Distribution:
             return "choice of " + ", ".join(str(v) for v in self.args)
         if self.kind == "uniform":
             return f"uniform {self.args[0]:g} to {self.args[1]:g}"
+        if self.kind == "loguniform":
+            return f"log-uniform {self.args[0]:g} to {self.args[1]:g}"
+        if self.kind == "bernoulli":
+            return f"1 with probability {self.args[0]:g}, else 0"
         a, b, low, high = self.args
         trunc = "" if not (math.isfinite(high) or (low > -np.inf and low != 0.0)) \
             else f", within [{low:g}, {high:g}]"
@@ -152,6 +175,8 @@ class Distribution:
         if self.kind == "choice":
             return {"distribution": "choice", "values": list(self.args)}
         required, optional = KEYS[self.kind]
+        if not optional:
+            return {"distribution": self.kind, **dict(zip(required, self.args, strict=True))}
         out: dict[str, Any] = {"distribution": self.kind}
         out.update(zip(required, self.args[:len(required)], strict=True))
         if optional:
@@ -212,6 +237,8 @@ def parse_distribution(table: Any) -> Distribution:
     if kind == "choice":
         return Distribution("choice", _choice_values(table["values"]))
     args = [_number(k, table[k]) for k in required]
+    if kind in ("loguniform", "bernoulli"):
+        return _simple(kind, args)
     low = _number("low", table["low"]) if "low" in table else -math.inf
     high = _number("high", table["high"]) if "high" in table else math.inf
     if kind == "uniform":
@@ -232,6 +259,21 @@ def parse_distribution(table: Any) -> Distribution:
         raise ParameterError("low", f"[{low:g}, {high:g}] holds almost none of the "
                              f"{kind} distribution (it lies far in one tail)")
     return Distribution(kind, (*args, low, high) if kind != "uniform" else (low, high))
+
+
+def _simple(kind: str, args: list[float]) -> Distribution:
+    """A ``loguniform`` (0 < low < high) or ``bernoulli`` (0 <= p <= 1) distribution."""
+    if kind == "bernoulli":
+        if not 0.0 <= args[0] <= 1.0:
+            raise ParameterError("p", f"p={args[0]!r} must lie in [0, 1]")
+        return Distribution(kind, tuple(args))
+    low, high = args
+    if low <= 0:
+        raise ParameterError("low", f"low={low!r} must be above 0 (a log-uniform draws "
+                             "positive values)")
+    if not low < high:
+        raise ParameterError("high", f"low={low!r} must be below high={high!r}")
+    return Distribution(kind, (low, high))
 
 
 def _mass(kind: str, args: list[float], low: float, high: float) -> float:

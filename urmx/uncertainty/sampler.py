@@ -22,7 +22,38 @@ parameter               as         replaces
                                    support's mass plus half the wall's) is the factor
                                    times the study's, > 0
 ``damping``             value      each flexible support's damping ratio, in [0, 1]
+``thickness``           value      the wall's thickness [m] (a *wall drawn in geometry*)
+``height``              value      the wall's height [m]
+``overburden_ratio``    value      O/W: the top diaphragm's effective mass (the overburden
+                                   of Table I) over the wall's effective mass, >= 0
+``diaphragm_weight``    value      the diaphragm's seismic weight [kPa] (paper Section
+                                   3.2); with ``overburden_ratio`` it sets the tributary
+                                   plan area only (below)
+``diaphragm_frequency`` value      each flexible support's frequency [Hz] (Table IV
+                                   footnote), absolute rather than a factor
+``rigid_top``           value      1: the diaphragms are rigid (a ``bernoulli``: a share of
+                                   rigid tops), 0: flexible
+``storey``              value      ``single`` (rigid ground below, a diaphragm above) or
+                                   ``higher`` (between two diaphragms alike; a ``choice``)
 ======================  =========  ========================================================
+
+A *wall drawn in geometry* (any of the last seven parameters sampled) is rebuilt from the
+cell's wall as `urmx.Wall.in_building` builds a building's wall: its effective mass is the
+cell's mass per unit of thickness times height (the building's density, wall length and the
+8/15 of Eq. 7) times the sampled ``thickness * height``; the top diaphragm's effective
+mass is ``overburden_ratio`` times that mass (Table I's psi = O/W of the whole wall; the
+cell's own diaphragm mass when not sampled); a flexible diaphragm's stiffness is
+``(2 pi f)^2 (m_d + m/2)`` for the sampled ``diaphragm_frequency`` ``f`` (the cell's own
+stiffness when not sampled); ``storey`` sets the bottom support (a higher storey's bottom
+diaphragm is the top's: same mass, stiffness and damping); ``rigid_top = 1`` makes both
+diaphragms rigid. In this model the diaphragm's effective mass is both its inertia and
+the wall's overburden, and every force scales with the masses (the spring's stiffness with
+them, for a sampled frequency), so once O/W and the frequency are drawn the diaphragm's
+seismic weight changes nothing in the analysis: it sets the tributary plan area
+``A = m_d g / (8/15 q)`` an engineer would read the wall from, kept as a sampled input.
+``[study.sampling] max_slenderness`` leaves out the walls with ``height / thickness``
+above it: the design is drawn larger until ``samples`` walls pass, and the first
+``samples`` that pass are kept, in the design's order.
 
 A *factor* multiplies the cell's own value (the walls and diaphragms of a study differ, so
 one absolute value could not serve them all): ``frequency = 1.1`` makes every flexible
@@ -114,9 +145,27 @@ PARAMETERS: dict[str, Target] = {
                         "flexible support's frequency"),
     "damping": Target("support", False, 0.0, 1.0, "[]", "1", "damping ratio of each "
                       "flexible support"),
+    "thickness": Target("geometry", False, 0.0, math.inf, "()", "m", "wall thickness"),
+    "height": Target("geometry", False, 0.0, math.inf, "()", "m", "wall height"),
+    "overburden_ratio": Target("geometry", False, 0.0, math.inf, "[)", "1",
+                               "overburden over wall weight O/W (top diaphragm effective "
+                               "mass over wall effective mass)"),
+    "diaphragm_weight": Target("geometry", False, 0.0, math.inf, "()", "kPa",
+                               "diaphragm seismic weight per plan area"),
+    "diaphragm_frequency": Target("geometry", False, 0.0, math.inf, "()", "Hz",
+                                  "frequency of each flexible diaphragm (Table IV "
+                                  "footnote)"),
+    "rigid_top": Target("geometry", False, 0.0, 1.0, "[]", "1",
+                        "1 where the diaphragms are rigid, else 0"),
+    "storey": Target("geometry", False, math.nan, math.nan, "[]", "",
+                     "single storey or higher storey between two diaphragms alike"),
 }
+#: the parameters that draw a wall in geometry (module docstring)
+GEOMETRY = tuple(k for k, t in PARAMETERS.items() if t.on == "geometry")
+STOREYS = ("single", "higher")
 METHODS = ("lhs", "sobol", "random", "saltelli")
-KEYS = ("samples", "seed", "method", "parameters")  # of the [study.sampling] table
+#: the keys of the [study.sampling] table
+KEYS = ("samples", "seed", "method", "parameters", "max_slenderness")
 
 
 def coordinate_name(parameter: str) -> str:
@@ -129,6 +178,13 @@ def coordinate_name(parameter: str) -> str:
 def _check_parameter(name: str, dist: Distribution) -> None:
     """A distribution's bounds (where it has them) within the parameter's valid range."""
     target = PARAMETERS[name]
+    if name == "storey":
+        if dist.kind != "choice" or any(v not in STOREYS for v in dist.values):
+            raise ParameterError("values" if dist.kind == "choice" else "distribution",
+                                 "storey is drawn as a choice of "
+                                 f"{', '.join(STOREYS)} (values = [\"single\", "
+                                 "\"higher\"])")
+        return
     if name == "impact":
         if dist.kind != "choice" or any(v not in IMPACT_LAWS for v in dist.values):
             raise ParameterError("values" if dist.kind == "choice" else "distribution",
@@ -163,12 +219,15 @@ class Sampling:
         ``lhs``, ``sobol``, ``random`` or ``saltelli``.
     parameters : dict of str to Distribution
         Each sampled parameter's distribution, in the study file's order.
+    max_slenderness : float, optional
+        Leave out the walls with ``height / thickness`` above it (module docstring).
     """
 
     samples: int
     seed: int
     method: str = "lhs"
     parameters: dict[str, Distribution] = field(default_factory=dict)
+    max_slenderness: float | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -186,14 +245,28 @@ class Sampling:
         return unit_design(self.samples, len(self.parameters), self.method, self.seed)
 
     def draw(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """(the unit design, each parameter's values over the samples)."""
-        u = self.unit()
-        return u, {name: dist.ppf(u[:, i]) for i, (name, dist)
-                   in enumerate(self.parameters.items())}
+        """(the unit design, each parameter's values over the samples); with
+        ``max_slenderness`` the first `samples` walls of a larger design that pass it."""
+        n = self.samples
+        while True:
+            u = unit_design(n, len(self.parameters), self.method, self.seed)
+            values = {name: dist.ppf(u[:, i]) for i, (name, dist)
+                      in enumerate(self.parameters.items())}
+            if self.max_slenderness is None:
+                return u, values
+            keep = np.flatnonzero(values["height"] / values["thickness"]
+                                  <= self.max_slenderness)
+            if len(keep) >= self.samples:
+                keep = keep[:self.samples]
+                return u[keep], {k: v[keep] for k, v in values.items()}
+            n = 2 * n if self.method == "sobol" else n + max(1, n // 16)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"samples": self.samples, "seed": self.seed, "method": self.method,
-                "parameters": {k: d.to_dict() for k, d in self.parameters.items()}}
+        out = {"samples": self.samples, "seed": self.seed, "method": self.method,
+               "parameters": {k: d.to_dict() for k, d in self.parameters.items()}}
+        if self.max_slenderness is not None:
+            out["max_slenderness"] = self.max_slenderness
+        return out
 
 
 def unit_design(n: int, d: int, method: str, seed: int) -> np.ndarray:
@@ -264,7 +337,41 @@ def parse_sampling(table: Any) -> Sampling:
     if "stiffness" in out and "frequency" in out:
         raise ParameterError("parameters.frequency", "stiffness and frequency both set the "
                              "diaphragm's stiffness: sample one of them")
-    return Sampling(samples=samples, seed=seed, method=method, parameters=out)
+    _check_geometry(out)
+    return Sampling(samples=samples, seed=seed, method=method, parameters=out,
+                    max_slenderness=_max_slenderness(table, out, method))
+
+
+def _check_geometry(out: dict[str, Distribution]) -> None:
+    """The geometry parameters sampled together as they can be: a frequency set once, the
+    diaphragm weight only beside the overburden ratio."""
+    if "diaphragm_frequency" in out:
+        for other in ("frequency", "stiffness"):
+            if other in out:
+                raise ParameterError(f"parameters.{other}", f"{other} and "
+                                     "diaphragm_frequency both set the diaphragm's "
+                                     "stiffness: sample one of them")
+    if "diaphragm_weight" in out and "overburden_ratio" not in out:
+        raise ParameterError("parameters.diaphragm_weight", "diaphragm_weight is sampled "
+                             "beside overburden_ratio (it sets the tributary plan area of "
+                             "the diaphragm mass O/W gives)")
+
+
+def _max_slenderness(table: dict, out: dict[str, Distribution], method: str) -> float | None:
+    """``max_slenderness`` of the table: a number above 0, with thickness and height
+    sampled and a design that can be drawn larger (not ``saltelli``)."""
+    if "max_slenderness" not in table:
+        return None
+    v = table["max_slenderness"]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+        raise ParameterError("max_slenderness", f"{v!r} must be a number above 0")
+    if "thickness" not in out or "height" not in out:
+        raise ParameterError("max_slenderness", "leaves out walls by height / thickness: "
+                             "sample both thickness and height")
+    if method == "saltelli":
+        raise ParameterError("max_slenderness", "a saltelli design cannot leave samples "
+                             "out (its points come in blocks): use lhs, sobol or random")
+    return float(v)
 
 
 # ---- a sample applied to a cell ---------------------------------------------------------------
@@ -287,6 +394,8 @@ def apply(wall: Wall, values: dict[str, Any]) -> Wall:
         The sample makes no valid wall (a PMR that leaves no plateau with the wall's
         kappa, ...): the message of `Wall`.
     """
+    if any(k in values for k in GEOMETRY):
+        wall = _geometry(wall, values)
     changes: dict[str, Any] = {k: float(values[k]) for k in ("pmr", "crack_ratio", "kappa")
                                if k in values}
     mass = wall.mass * float(values["mass"]) if "mass" in values else wall.mass
@@ -305,6 +414,31 @@ def apply(wall: Wall, values: dict[str, Any]) -> Wall:
         if "damping" in values:
             changes[f"{side}_damping"] = float(values["damping"])
     return wall.replace(**changes) if changes else wall
+
+
+def _geometry(wall: Wall, values: dict[str, Any]) -> Wall:
+    """The cell's wall drawn in geometry (module docstring): thickness, height, overburden
+    ratio, diaphragm frequency, rigid diaphragms and storey; the other fields the cell's."""
+    t = float(values.get("thickness", wall.thickness))
+    h = float(values.get("height", wall.height))
+    mass = wall.mass / (wall.thickness * wall.height) * t * h
+    md = float(values["overburden_ratio"]) * mass if "overburden_ratio" in values \
+        else wall.top_mass
+    rigid = float(values.get("rigid_top", 0.0)) >= 0.5 or (
+        wall.top_rigid and "diaphragm_frequency" not in values)
+    zeta = float(values.get("damping", wall.top_damping))
+    if rigid:
+        k: float | str = RIGID
+        zeta = 0.0
+    elif "diaphragm_frequency" in values:
+        k = (2.0 * math.pi * float(values["diaphragm_frequency"])) ** 2 * (md + 0.5 * mass)
+    else:
+        k = wall.top_stiffness
+    higher = values["storey"] == "higher" if "storey" in values else not wall.bottom_rigid
+    top = dict(top_stiffness=k, top_mass=md, top_damping=zeta)
+    bottom = dict(bottom_stiffness=k, bottom_mass=md, bottom_damping=zeta) if higher else \
+        dict(bottom_stiffness=RIGID, bottom_mass=0.0, bottom_damping=0.0)
+    return wall.replace(thickness=t, height=h, mass=mass, **top, **bottom)
 
 
 def sample_values(values: dict[str, np.ndarray], j: int) -> dict[str, Any]:

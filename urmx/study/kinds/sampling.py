@@ -52,7 +52,7 @@ if TYPE_CHECKING:
 
 DIMS = ("wall", "diaphragm", "record", "sample")
 #: the keys of ``[study.sampling]`` (`urmx.uncertainty.sampler.KEYS`; docs/study-files.md)
-SAMPLING_KEYS = ("samples", "seed", "method", "parameters")
+SAMPLING_KEYS = ("samples", "seed", "method", "parameters", "max_slenderness")
 FIT_OUTPUTS = ("total_median_collapse_intensity", "total_dispersion", "record_dispersion",
                "model_dispersion")
 
@@ -310,8 +310,8 @@ def _sample_coords(study: Any) -> dict[str, xr.Variable]:
               "sample_unit": coord("sample_unit", ("sample", "parameter"), s.unit)}
     for name, dist in s.sampling.parameters.items():
         values = s.values[name]
-        values = values.astype(object) if dist.kind == "choice" and name == "impact" \
-            else values.astype(np.float64)
+        values = values.astype(object) if dist.kind == "choice" and \
+            isinstance(values[0], str) else values.astype(np.float64)
         attrs = {"units": PARAMETERS[name].units, "long_name": PARAMETERS[name].long_name}
         attrs = {k: v for k, v in attrs.items() if v}
         attrs["comment"] = f"sampled: {dist.describe()}"
@@ -329,13 +329,85 @@ def _coords(study: Any, records: dict) -> dict[str, xr.Variable]:
     from ..dataset import coord, grid_coords
 
     coords = grid_coords(study, records)
-    for name in ("cor", "cell_frequency", "pmr", "crack_ratio"):
-        if name in ("cor", "cell_frequency") or name in study.settings.values:
+    drawn = _geometry_sampled(study)
+    for name in list(coords):
+        if name in ("cor", "cell_frequency") or name in study.settings.values or (
+                drawn and name in ("slenderness", "mass", "diaphragm_mass")):
             del coords[name]
     coords.update(_sample_coords(study))
     coords["cell_frequency"] = coord("cell_frequency", ("wall", "diaphragm", "sample"),
                                      _cell_walls(study, lambda w: w.diaphragm_frequency("top")))
+    if drawn:
+        coords.update(_drawn_coords(study))
     return coords
+
+
+def _geometry_sampled(study: Any) -> bool:
+    """Whether the study draws its walls in geometry (`urmx.uncertainty.sampler.GEOMETRY`)."""
+    from ...uncertainty.sampler import GEOMETRY
+
+    return any(k in study.settings.values for k in GEOMETRY)
+
+
+def _drawn_coords(study: Any) -> dict[str, xr.Variable]:
+    """Each cell's drawn wall: slenderness, effective wall and diaphragm masses and the
+    tributary plan area of the diaphragm's seismic weight (`urmx.uncertainty.sampler`)."""
+    import xarray as xr
+
+    from ...model import EFFECTIVE_MASS, PAPER_G
+
+    dims3 = ("wall", "diaphragm", "sample")
+    out = {"slenderness": xr.Variable(dims3, _cell_walls(study, lambda w: w.slenderness),
+                                      attrs={"units": "1", "long_name": "h/t of the drawn "
+                                             "wall"}),
+           "mass": xr.Variable(dims3, _cell_walls(study, lambda w: w.mass), attrs={
+               "units": "kg", "long_name": "effective wall mass (Eq. 7)"}),
+           "diaphragm_mass": xr.Variable(dims3, _cell_walls(study, lambda w: w.top_mass),
+                                         attrs={"units": "kg", "long_name": "effective top "
+                                                "diaphragm mass (Eq. 7; the overburden)"})}
+    q = study.settings.values.get("diaphragm_weight")
+    if q is not None:
+        area = out["diaphragm_mass"].values * PAPER_G / (EFFECTIVE_MASS * 1e3 * q)
+        out["plan_area"] = xr.Variable(dims3, area, attrs={
+            "units": "m2", "long_name": "tributary plan area of the diaphragm mass at the "
+            "sampled seismic weight", "comment": "m_d g / (8/15 q)"})
+    return out
+
+
+def _predictor_vars(study: Any, records: dict) -> dict[str, xr.Variable]:
+    """The candidate predictors of each drawn wall (`urmx.fragility.predictors`) and each
+    record's measures for it as analysed (`urmx.fragility.intensity.record_measures`):
+    ``predictor_<name>`` over (wall, diaphragm, sample), ``measure_<im>`` over (wall,
+    diaphragm, record, sample)."""
+    import xarray as xr
+
+    from ...fragility.intensity import IM_ATTRS, record_measures
+    from ...fragility.predictors import PREDICTORS, wall_predictors
+    from ...records.readers import check_finite
+
+    n, nw, nd = study.settings.size, len(study.walls), len(study.diaphragms)
+    walls = [w for iw, idp in np.ndindex(nw, nd) for w in _walls(study, iw, idp, list(range(n)))]
+    table = [wall_predictors(w) for w in walls]
+    dims3 = ("wall", "diaphragm", "sample")
+    out = {f"predictor_{k}": xr.Variable(dims3, np.array([t[k] for t in table]).reshape(
+        nw, nd, n), attrs={"units": units, "long_name": name, "comment": "from the wall "
+                           "alone: formula and source in urmx.fragility.predictors"})
+           for k, (units, name) in PREDICTORS.items()}
+    ims = ("pga", "pgv", "sa_avg", "sa_diaphragm")
+    vals = {im: np.full((nw, nd, len(study.records), n), np.nan) for im in ims}
+    for ir, rid in enumerate(study.records):
+        rec = records[rid]
+        acc = check_finite(rec.scaled(), f"record {rec.id!r}", rec.dt)
+        m = record_measures(acc, rec.dt, walls)
+        for im in ims:
+            vals[im][:, :, ir, :] = m[im].reshape(nw, nd, n)
+    for im in ims:
+        units, name = IM_ATTRS[im]
+        out[f"measure_{im}"] = xr.Variable((*dims3[:2], "record", "sample"), vals[im], attrs={
+            "units": units, "long_name": f"{name} of the record as analysed (scale 1) for "
+            "the cell's wall", "comment": "urmx.fragility.intensity.record_measures; a "
+            "capacity in pga times measure/measure_pga is the capacity in that measure"})
+    return out
 
 
 def _attrs(study: Any, attrs: dict[str, Any]) -> dict[str, Any]:
@@ -382,6 +454,8 @@ def assemble(study: Any, records: dict, cells: dict, extras: dict,
         "record", np.fmax.reduce(np.asarray(cells["predominant"]), axis=(0, 1, 3)),
         attrs=var_attrs("predominant_frequency", comment="of each record, Konno-Ohmachi "
                         "smoothed (urmx.records.predominant_frequency)"))
+    if _geometry_sampled(study):
+        data_vars.update(_predictor_vars(study, records))
     return xr.Dataset(data_vars, coords=coords, attrs=_attrs(study, attrs))
 
 

@@ -243,7 +243,8 @@ def _preamble(rep: _Report, notes: list[str]) -> list[str]:
     lines += table(["study", "dimensions", "history (last line)"], rows) + [""]
     from .reporting import made_from
 
-    lines += [f"- `{study_kind(ds)}`: " + made_from(ds) for ds in rep.studies.values()] + [""]
+    lines += [f"- `{study_kind(ds)}`: " + made_from(ds, commit=False)
+              for ds in rep.studies.values()] + [""]
     for label, kind in KINDS.items():
         if kind not in rep.studies:
             notes.append(f"no {label} archive was given: its figures and tables are missing")

@@ -134,18 +134,26 @@ DEGENERATE_NOTE = (f"{DEGENERATE}: a bound of this interval equals its estimate:
                    "it is no confidence interval.")
 
 
-def made_from(ds: xr.Dataset, name: str = "archive") -> str:
+def made_from(ds: xr.Dataset, name: str = "archive", commit: bool = True) -> str:
     """One sentence naming the code an archive was made with (its ``urmx_git_commit``,
     local changes, ``kernel_source_hash``: `urmx.provenance.attrs`) and whether that kernel
     differs from the one running now (`urmx.jitcache.SOURCE_HASH`): a report made from an
-    archive of an older kernel says so."""
+    archive of an older kernel says so.
+
+    ``commit=False`` leaves the commit out of the sentence (it points at the archive's
+    attribute instead): for a committed report that a run in any later checkout writes
+    again (`urmx paper` in CI), whose text must not change with each new commit when its
+    numbers do not (issue 33, item 3); the kernel source hash stays, since the numbers
+    change with it."""
     from .jitcache import SOURCE_HASH
 
-    commit = str(ds.attrs.get("urmx_git_commit", "none"))
+    at = str(ds.attrs.get("urmx_git_commit", "none"))
     kernel = str(ds.attrs.get("kernel_source_hash", "unknown"))
-    code = ("an unrecorded commit" if commit in ("none", "") else
-            f"commit `{commit[:12]}`" + (" with local changes"
-                                         if ds.attrs.get("urmx_git_dirty") == 1 else ""))
+    code = ("an unrecorded commit" if at in ("none", "") else
+            f"commit `{at[:12]}`" + (" with local changes"
+                                     if ds.attrs.get("urmx_git_dirty") == 1 else ""))
+    if not commit and at not in ("none", ""):
+        code = "the commit its attribute `urmx_git_commit` names"
     if kernel == "unknown":
         same = ("it does not record its kernel source hash, so whether the current kernel "
                 f"(`{SOURCE_HASH[:16]}`) would give the same numbers is not known")

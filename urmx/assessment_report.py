@@ -163,9 +163,32 @@ def _flexibility(c: xr.Dataset, rows: list[dict], p: str, group: str, suffix: st
     if np.isfinite(a) and np.isfinite(b) and a > 0 and b > 0:
         word = "less" if a > b else "more"
         text += (f": the procedure is {word} conservative on the flexible diaphragms "
-                 f"(ratio x{a / b:.2f}), and since its capacity is the same on every "
-                 "diaphragm, diaphragm flexibility (through the dynamics) is what moves it")
+                 f"(ratio x{a / b:.2f})")
+        own = _own_change(c, p, soft, stiff)
+        if own is None:
+            text += (", and since its capacity is the same on every diaphragm, diaphragm "
+                     "flexibility (through the dynamics) is what moves it")
+        else:
+            text += (f"; its own capacity changes with the diaphragm too (median capacity "
+                     f"scale on {'-'.join(soft)} x{own:.2f} that on {'-'.join(stiff)}), so "
+                     "the procedure and the dynamics move it together")
     return text + "."
+
+
+def _own_change(c: xr.Dataset, p: str, soft: list[str], stiff: list[str]) -> float | None:
+    """None when procedure `p`'s capacity scale is the same on every diaphragm of the two
+    groups (to 1e-9 relative, wherever finite); else the ratio of its median capacity scale
+    on the `soft` diaphragms to that on the `stiff` ones."""
+    cap = c.capacity_scale.sel(procedure=p)
+    arr = cap.sel(diaphragm=[*soft, *stiff]).transpose("diaphragm", ...).values
+    arr = arr.reshape(arr.shape[0], -1)
+    fin = np.isfinite(arr).all(axis=0) & (np.abs(arr).max(axis=0) > 0)
+    if not fin.any() or np.all(np.ptp(arr[:, fin], axis=0)
+                               <= 1e-9 * np.abs(arr[:, fin]).max(axis=0)):
+        return None
+    lo = np.nanmedian(cap.sel(diaphragm=soft).values)
+    hi = np.nanmedian(cap.sel(diaphragm=stiff).values)
+    return float(lo / hi) if np.isfinite(lo) and np.isfinite(hi) and hi > 0 else None
 
 
 def _procedure_lines(c: xr.Dataset) -> list[str]:
@@ -219,7 +242,8 @@ def _header(c: xr.Dataset, archive) -> list[str]:
         "",
         f"- Archive: `{name}`, study `{a.get('archive_study_name', '?')}`, made by urmx "
         f"commit `{a.get('archive_urmx_git_commit', '?')}`{dirty}, kernel source hash "
-        f"`{a.get('archive_kernel_source_hash', '?')}`; COR {a.get('cor')}.",
+        f"`{a.get('archive_kernel_source_hash', '?')}`; COR {a.get('cor')}. "
+        + _kernel_now(str(a.get("archive_kernel_source_hash", ""))),
         f"- Report written by urmx {code_version()} ({describe(identity())}).",
         f"- {c.sizes['wall']} walls x {c.sizes['diaphragm']} diaphragms x "
         f"{c.sizes['record']} records; the capacity scale of a procedure is the record scale "
@@ -231,13 +255,27 @@ def _reading() -> str:
     return ("How to read: `ratio` = procedure capacity scale / IDA collapse scale. Below 1 "
             "the procedure fails the wall at a lower intensity than the one that collapses "
             "it (conservative); above 1 it accepts intensities at which the wall collapses "
-            "(unconservative). Every procedure here uses the rigid-support mechanism (none "
-            "has a flexible-diaphragm provision that could be read), so its capacity is the "
-            "same on D1-D5: a change of ratio across diaphragms is the dynamics'. The archive "
-            "has no pinned top; D5 (1e9 N/m) is the catalog's stand-in for it.")
+            "(unconservative). Every code procedure here uses the rigid-support mechanism "
+            "(none has a flexible-diaphragm provision that could be read), so its capacity "
+            "is the same on D1-D5: a change of its ratio across diaphragms is the dynamics'. "
+            "`urmx_rule` is urmx's own rule from the wall-population study: it depends on "
+            "the diaphragm's frequency by design, and it predicts the *median* collapse "
+            "capacity with no safety margin, so it is expected to be unconservative for "
+            "about half of the cells; its ratio measures its accuracy, not its safety. The "
+            "archive has no pinned top; D5 (1e9 N/m) is the catalog's stand-in for it.")
 
 
 def _write_csv(rows: list[dict], path: Path) -> None:
     keys = list(rows[0])
     text = [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]
     path.write_text("\n".join(text) + "\n", encoding="utf-8")
+
+
+def _kernel_now(kernel: str) -> str:
+    """Whether the archive's kernel is the one running now (issue 38, item 5)."""
+    from .jitcache import SOURCE_HASH
+
+    if kernel[:16] == SOURCE_HASH[:16]:
+        return "The current kernel is the same."
+    return (f"**The current kernel differs** (`{SOURCE_HASH[:16]}`): run the IDA again for "
+            "numbers of the current kernel.")

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from . import predictors_analysis as pa
+from .reporting import made_from
 
 LABELS = {"slenderness": "h/t", "height": "h", "thickness": "t",
           "static_acceleration": "a_rock (Table I M0)", "instability_case2": "Delta_2",
@@ -480,7 +481,7 @@ def _header(ds, a: dict[str, Any], run: float | None) -> list[str]:
             f"| run time | {rt}; started {when}, on the shared 2-core machine |",
             f"| urmx / kernel | {ds.attrs.get('urmx_version')} (commit "
             f"`{str(ds.attrs.get('urmx_git_commit'))[:12]}`), kernel source hash "
-            f"`{ds.attrs.get('kernel_source_hash')}` |", ""]
+            f"`{ds.attrs.get('kernel_source_hash')}` |", "", made_from(ds), ""]
 
 
 def _body(a: dict[str, Any], figs: list[str], replicates: int, seconds: float) -> list[str]:

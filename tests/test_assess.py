@@ -231,7 +231,10 @@ def test_a_thicker_wall_never_has_a_lower_capacity(demand, supports):
                   for b in np.linspace(0.1, 0.6, 11)]
             assert all(y >= x for x, y in zip(a0, a0[1:], strict=False))
             continue
-        assert all(y >= x for x, y in zip(scales, scales[1:], strict=False)), name
+        # a wall outside a procedure's scope is not applicable (NaN): compare the others
+        fin = [x for x in scales if np.isfinite(x)]
+        assert len(fin) >= 2, name
+        assert all(y >= x for x, y in zip(fin, fin[1:], strict=False)), name
 
 
 def test_units_of_every_quantity():
@@ -240,7 +243,7 @@ def test_units_of_every_quantity():
         assert r.quantities
         for name, q in r.quantities.items():
             assert q.unit in UNITS, (name, q.unit)
-        assert r.unit in ("m", "1", "")
+        assert r.unit in ("m", "1", "", "m s-2")
     # lengths in metres, periods in seconds: a wall given in mm is refused by urmx.Wall
     with pytest.raises(InputError, match="millimetres"):
         urmx.Wall(230.0, 3500.0, 0.5, 1000.0)
@@ -322,7 +325,7 @@ def test_compare_on_a_synthetic_archive():
     ida = 2.0 * cap
     ida[0, 0, 0] = 0.5 * cap[0, 0, 0]
     c = compare(synthetic_archive(walls, ida), walls=walls, records=records)
-    assert dict(c.sizes) == {"procedure": 4, "wall": 2, "diaphragm": 2, "record": 2}
+    assert dict(c.sizes) == {"procedure": len(PROCEDURES), "wall": 2, "diaphragm": 2, "record": 2}
     assert list(c.procedure.values) == list(PROCEDURES)
     dh = c.sel(procedure="doherty")
     assert dh.capacity_scale.values == pytest.approx(cap)
@@ -357,7 +360,7 @@ def test_assessment_report_on_a_synthetic_archive(tmp_path):
     assert (tmp_path / "doherty.png").stat().st_size > 1000
     assert not (tmp_path / "ntc_kinematic.png").exists()
     csv = (tmp_path / "comparison.csv").read_text(encoding="utf-8").splitlines()
-    assert csv[0].startswith("procedure,diaphragm,group,pairs") and len(csv) == 1 + 4 * 2
+    assert csv[0].startswith("procedure,diaphragm,group,pairs") and len(csv) == 1 + len(PROCEDURES) * 2
 
 
 def test_compare_iterates_the_registry_and_refuses_a_non_ida_archive(tmp_path):

@@ -360,7 +360,8 @@ def test_assessment_report_on_a_synthetic_archive(tmp_path):
     assert (tmp_path / "doherty.png").stat().st_size > 1000
     assert not (tmp_path / "ntc_kinematic.png").exists()
     csv = (tmp_path / "comparison.csv").read_text(encoding="utf-8").splitlines()
-    assert csv[0].startswith("procedure,diaphragm,group,pairs") and len(csv) == 1 + len(PROCEDURES) * 2
+    assert csv[0].startswith("procedure,diaphragm,group,pairs")
+    assert len(csv) == 1 + len(PROCEDURES) * 2
 
 
 def test_compare_iterates_the_registry_and_refuses_a_non_ida_archive(tmp_path):

@@ -412,6 +412,6 @@ def test_at_the_minimum_the_statistics_are_stated(ida, tmp_path, monkeypatch):
     assert "urmx recommends `" in report and "Not ranked" not in report
     shares = re.findall(r"needs about ([0-9.e+-]+) % of the records", report)
     assert shares and all(len(s.replace(".", "").lstrip("0")) <= 2 for s in shares), shares
-    assert "In brackets: the 90 % bootstrap interval" in report
+    assert "In brackets: the 90 % studentized bootstrap interval" in report
     if reporting.DEGENERATE in report:
         assert reporting.DEGENERATE_NOTE in report

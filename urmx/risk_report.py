@@ -363,6 +363,8 @@ def comparison_findings(c: xr.Dataset | None, records: int = MIN_RECORDS) -> lis
         return [f"- **Risk in pga against sa_avg.** Not compared: "
                 f"{too_few(records, 'comparing rates in two measures')}."]
     labs = [str(x) for x in c.diaphragm.values if FA.base_label(str(x)) in STIFFEN]
+    if not labs:
+        return []
     ratio = c.ratio.sel(diaphragm=labs)
     ext = c.pga_extrapolated.sel(diaphragm=labs)
     return [f"- **Risk in pga against sa_avg.** Over a hazard curve built the same NZS "
@@ -444,11 +446,19 @@ def deaggregation_lines(d: xr.Dataset, r: dict, heading: str = "###") -> list[st
             + ", ".join(f"{p:g}" for p in BAND_PERIODS) + " years: the integral of "
             "P(collapse | x) |d lambda(x)| over the band, `urmx.fragility.risk.deaggregate`) "
             "and from beyond the last computed intensity: "
-            f"{_computed_text(curve, f, unit)}. That extrapolated share runs from "
-            f"{_share(float(ext.min()))} % to {_share(float(ext.max()))} % (median "
-            f"{_share(float(ext.median()))} %): where it is large the rate rests on the "
-            "extension of the curve, not on the hazard the file computes.", "",
+            f"{_computed_text(curve, f, unit)}. That extrapolated share {_span(ext)}: "
+            "where it is large the rate rests on the extension of the curve, not on the "
+            "hazard the file computes.", "",
             *table(head, rows), ""]
+
+
+def _span(ext: xr.DataArray) -> str:
+    """``runs from a % to b % (median m %)``, or ``is a %`` when every share prints alike
+    (one wall and diaphragm: no range to state)."""
+    lo, hi = _share(float(ext.min())), _share(float(ext.max()))
+    if lo == hi:
+        return f"is {lo} %"
+    return f"runs from {lo} % to {hi} % (median {_share(float(ext.median()))} %)"
 
 
 def _share(v: float) -> str:
@@ -570,6 +580,8 @@ def im_comparison_lines(c: xr.Dataset | None) -> list[str]:
     if c is None:
         return []
     labs = [str(x) for x in c.diaphragm.values if FA.base_label(str(x)) in STIFFEN]
+    if not labs:  # no catalog diaphragm the comparison is made on (an own support)
+        return []
     rows = []
     for lab in labs:
         for w in c.wall.values:

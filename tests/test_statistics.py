@@ -60,7 +60,7 @@ def test_a_bad_group_is_refused_naming_the_record(tmp_path):
     text = Path(urmx.records.manifest.__module__.replace(".", "/")).name  # noqa: F841
     src = tmp_path / "m.toml"
     src.write_text('[[record]]\nid = "a"\nset = "s"\ngroup = 3\nevent = "e"\nfile = "f"\n'
-                   'format = "columns"\ndt = 0.01\nunit = "g"\nsha256 = "x"\n'
+                   'format = "columns"\ndt = 0.01\nunit = "g"\nsha256 = "' + "0" * 64 + '"\n'
                    'expected_pga_g = 0.1\nscale_factor = 1.0\nsource = "s"\nnotes = ""\n')
     with pytest.raises(urmx.records.ManifestError, match="record a: group must be a "
                                                          "non-empty string"):

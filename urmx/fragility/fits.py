@@ -471,8 +471,8 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
     resamples = _check_bootstrap(confidence, resamples)
     if interval not in INTERVALS:
         raise InputError(f"interval={interval!r}: use one of {', '.join(INTERVALS)}")
-    raw = np.asarray(capacities, dtype=float).ravel()
     x, cen = _capacities(capacities, censored)
+    raw = np.asarray(capacities, dtype=float).ravel()
     codes = _group_codes(groups, ~np.isnan(raw), x.size)
     y = np.log(x)
     obs = y[~cen]
@@ -505,8 +505,8 @@ def function_interval(capacities, censored, func, *, groups=None,
     by central differences of `step` in both logs. NaN bounds when there are fewer than
     `MIN_BOOTSTRAP` records (or groups) or no resample fits."""
     resamples = _check_bootstrap(confidence, resamples)
+    x, cen = _capacities(capacities, censored, "function_interval")
     raw = np.asarray(capacities, dtype=float).ravel()
-    x, cen = _capacities(capacities, censored)
     codes = _group_codes(groups, ~np.isnan(raw), x.size)
     y = np.log(x)
     if not resamples or int(codes.max()) + 1 < MIN_BOOTSTRAP:

@@ -140,11 +140,11 @@ def made_from(ds: xr.Dataset, name: str = "archive", commit: bool = True) -> str
     differs from the one running now (`urmx.jitcache.SOURCE_HASH`): a report made from an
     archive of an older kernel says so.
 
-    ``commit=False`` leaves the commit out of the sentence (it points at the archive's
-    attribute instead): for a committed report that a run in any later checkout writes
-    again (`urmx paper` in CI), whose text must not change with each new commit when its
-    numbers do not (issue 33, item 3); the kernel source hash stays, since the numbers
-    change with it."""
+    ``commit=False`` leaves the commit and the hash out of the sentence (it points at the
+    archive's attributes instead): for a committed report that a run in any later checkout
+    or environment writes again (`urmx paper` in CI), whose text must not change with each
+    new commit, or with the numba, llvmlite and Python builds the hash also stamps, when
+    its numbers do not (issue 33, item 3); whether the kernel differs is still said."""
     from .jitcache import SOURCE_HASH
 
     at = str(ds.attrs.get("urmx_git_commit", "none"))
@@ -152,8 +152,14 @@ def made_from(ds: xr.Dataset, name: str = "archive", commit: bool = True) -> str
     code = ("an unrecorded commit" if at in ("none", "") else
             f"commit `{at[:12]}`" + (" with local changes"
                                      if ds.attrs.get("urmx_git_dirty") == 1 else ""))
-    if not commit and at not in ("none", ""):
-        code = "the commit its attribute `urmx_git_commit` names"
+    if not commit and at not in ("none", "") and kernel != "unknown":
+        # neither the commit nor the hash, which also stamps the numba, llvmlite and Python
+        # builds of the environment: a report CI writes again must not change with them
+        same = ("the current kernel is the same" if kernel[:16] == SOURCE_HASH[:16] else
+                f"**the current kernel differs** (`{SOURCE_HASH[:16]}`, the archive's "
+                f"`{kernel[:16]}`): run the study again for numbers of the current kernel")
+        return (f"The {name} was made at the commit and with the kernel its attributes "
+                f"`urmx_git_commit` and `kernel_source_hash` name; {same}.")
     if kernel == "unknown":
         same = ("it does not record its kernel source hash, so whether the current kernel "
                 f"(`{SOURCE_HASH[:16]}`) would give the same numbers is not known")

@@ -212,21 +212,20 @@ def _capacities_at_period(ds: xr.Dataset, im: str, records_dir=None) -> xr.DataA
         units="m s-2", long_name=f"collapse intensity (Sa({period:g} s), 5 % damped)")
 
 
-def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None,
-            groups=None) -> xr.Dataset:
-    """Lognormal fits (with studentized bootstrap intervals, whole `groups` of records
-    resampled when given: `record_groups`) of the capacities in `im` per (wall, diaphragm)
-    at the first COR: ``median_collapse_intensity``, ``dispersion`` and their ``_lower`` /
-    ``_upper`` bounds. [units of `im`], [1]"""
-    from .fragility import RESAMPLES, fit_lognormal
-
-    d = first_cor(ds)
-    cap = capacities(d, im).transpose("wall", "diaphragm", "record").values
-    cen = d.censored.transpose("wall", "diaphragm", "record").values
-    names = ("median_collapse_intensity", "median_collapse_intensity_lower",
+#: the variables `fit_cells` returns, in `urmx.fragility.fit_lognormal`'s order
+FIT_NAMES = ("median_collapse_intensity", "median_collapse_intensity_lower",
              "median_collapse_intensity_upper", "dispersion", "dispersion_lower",
              "dispersion_upper")
-    out = {n: np.full(cap.shape[:2], np.nan) for n in names}
+
+
+def fit_cells(cap: np.ndarray, cen: np.ndarray, groups=None,
+              resamples: int | None = None) -> dict[str, np.ndarray]:
+    """`urmx.fragility.fit_lognormal` of each (wall, diaphragm) row of capacities `cap`
+    (shape (wall, diaphragm, record), NaN where a record did not run) with their censored
+    flags `cen`: `FIT_NAMES` -> arrays of shape (wall, diaphragm), NaN where no fit."""
+    from .fragility import RESAMPLES, fit_lognormal
+
+    out = {n: np.full(cap.shape[:2], np.nan) for n in FIT_NAMES}
     for iw, idp in np.ndindex(cap.shape[:2]):
         ran = np.isfinite(cap[iw, idp])
         try:
@@ -235,9 +234,22 @@ def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None,
                               groups=None if groups is None else np.asarray(groups)[ran])
         except ValueError:
             continue
-        for n, v in zip(names, (f.median, *f.median_ci, f.dispersion, *f.dispersion_ci),
+        for n, v in zip(FIT_NAMES, (f.median, *f.median_ci, f.dispersion, *f.dispersion_ci),
                         strict=True):
             out[n][iw, idp] = v
+    return out
+
+
+def fits_in(ds: xr.Dataset, im: str, resamples: int | None = None,
+            groups=None) -> xr.Dataset:
+    """Lognormal fits (with studentized bootstrap intervals, whole `groups` of records
+    resampled when given: `record_groups`) of the capacities in `im` per (wall, diaphragm)
+    at the first COR: ``median_collapse_intensity``, ``dispersion`` and their ``_lower`` /
+    ``_upper`` bounds. [units of `im`], [1]"""
+    d = first_cor(ds)
+    out = fit_cells(capacities(d, im).transpose("wall", "diaphragm", "record").values,
+                    d.censored.transpose("wall", "diaphragm", "record").values, groups,
+                    resamples)
     return xr.Dataset({n: (("wall", "diaphragm"), v) for n, v in out.items()},
                       coords={"wall": d.wall, "diaphragm": d.diaphragm})
 

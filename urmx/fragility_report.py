@@ -214,26 +214,10 @@ def _header(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
 def refit(d: xr.Dataset, groups) -> xr.Dataset:
     """The archive at one COR with the median, the dispersion and their intervals fitted
     again from its capacities by `urmx.fragility.fit_lognormal` (studentized bootstrap,
-    whole `groups` of records resampled when given), whatever method the archive's own
-    intervals came from."""
-    from .fragility import fit_lognormal
-
-    names = ("median_collapse_intensity", "median_collapse_intensity_lower",
-             "median_collapse_intensity_upper", "dispersion", "dispersion_lower",
-             "dispersion_upper")
-    cap = d.collapse_intensity.transpose("wall", "diaphragm", "record").values
-    cen = d.censored.transpose("wall", "diaphragm", "record").values
-    out = {n: np.full(cap.shape[:2], np.nan) for n in names}
-    for iw, idp in np.ndindex(cap.shape[:2]):
-        ran = np.isfinite(cap[iw, idp])
-        try:
-            f = fit_lognormal(cap[iw, idp, ran], cen[iw, idp, ran],
-                              groups=None if groups is None else np.asarray(groups)[ran])
-        except ValueError:
-            continue
-        for n, v in zip(names, (f.median, *f.median_ci, f.dispersion, *f.dispersion_ci),
-                        strict=True):
-            out[n][iw, idp] = v
+    whole `groups` of records resampled when given: `fragility_analysis.fit_cells`),
+    whatever method the archive's own intervals came from."""
+    out = FA.fit_cells(d.collapse_intensity.transpose("wall", "diaphragm", "record").values,
+                       d.censored.transpose("wall", "diaphragm", "record").values, groups)
     dims = ("wall", "diaphragm")
     return d.assign({n: xr.DataArray(v, dims=dims, coords={k: d[k] for k in dims}).assign_attrs(
         d[n].attrs if n in d else {}) for n, v in out.items()})

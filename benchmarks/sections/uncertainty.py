@@ -94,16 +94,27 @@ def time_study(study, out: Path) -> dict:
 
 def run(quick: bool, echo=print) -> dict:
     """Measure the section (``quick``: a 128-cell version of the study)."""
+    return run_sampling(quick, _quick_study, STUDY, ARCHIVE, "samples", echo)
+
+
+def run_sampling(quick: bool, quick_study, study_file: Path, archive: Path, unit: str,
+                 echo=print, then=None) -> dict:
+    """Time a sampling study (`time_study`): the catalog's `study_file` into `archive`, or
+    with ``quick`` the study `quick_study(tmp)` writes into a temporary folder; `then(data,
+    out)` adds to the data while the archive `out` still exists."""
     from urmx.catalog import load_study
 
     with tempfile.TemporaryDirectory() as tmp:
         if quick:
-            study, out = load_study(_quick_study(Path(tmp))), Path(tmp) / "quick.nc"
+            study, out = load_study(quick_study(Path(tmp))), Path(tmp) / "quick.nc"
         else:
-            study, out = load_study(STUDY), ARCHIVE
+            study, out = load_study(study_file), archive
             out.parent.mkdir(parents=True, exist_ok=True)
-        echo(f"  {study.name}: {study.settings.size} samples on 2 local workers -> {out}")
-        return time_study(study, out)
+        echo(f"  {study.name}: {study.settings.size} {unit} on 2 local workers -> {out}")
+        data = time_study(study, out)
+        if then is not None:
+            then(data, out)
+        return data
 
 
 def targets(data: dict) -> list[list[str]]:

@@ -12,13 +12,12 @@ from which ``python -m urmx.predictors_report results/wall-population.nc`` write
 
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 
 from urmx.markdown import table
 
 from ..common import verdict
-from .uncertainty import _load, time_study
+from .uncertainty import _load, run_sampling
 
 IN_ALL = False
 STUDY = "wall-population"
@@ -51,21 +50,13 @@ def _archive_data(ds, out: Path) -> dict:
 
 def run(quick: bool, echo=print) -> dict:
     """Measure the section (``quick``: 32 walls x 4 records)."""
-    from urmx.catalog import load_study
-
-    with tempfile.TemporaryDirectory() as tmp:
-        if quick:
-            study, out = load_study(_quick_study(Path(tmp))), Path(tmp) / "quick.nc"
-        else:
-            study, out = load_study(STUDY), ARCHIVE
-            out.parent.mkdir(parents=True, exist_ok=True)
-        echo(f"  {study.name}: {study.settings.size} walls on 2 local workers -> {out}")
-        data = time_study(study, out)
+    def archive_data(data: dict, out: Path) -> None:
         import xarray as xr
 
         with xr.open_dataset(out) as ds:
             data.update(_archive_data(ds, out))
-        return data
+
+    return run_sampling(quick, _quick_study, STUDY, ARCHIVE, "walls", echo, archive_data)
 
 
 def record(archive: str | Path, wall_seconds: float, cpu_seconds: float,

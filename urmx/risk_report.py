@@ -363,8 +363,6 @@ def comparison_findings(c: xr.Dataset | None, records: int = MIN_RECORDS) -> lis
         return [f"- **Risk in pga against sa_avg.** Not compared: "
                 f"{too_few(records, 'comparing rates in two measures')}."]
     labs = [str(x) for x in c.diaphragm.values if FA.base_label(str(x)) in STIFFEN]
-    if not labs:
-        return []
     ratio = c.ratio.sel(diaphragm=labs)
     ext = c.pga_extrapolated.sel(diaphragm=labs)
     return [f"- **Risk in pga against sa_avg.** Over a hazard curve built the same NZS "
@@ -543,10 +541,13 @@ def im_comparison(ds: xr.Dataset, r: dict, spectrum, records_dir=None) -> xr.Dat
     lognormal fragility's rate is ``k0 median^-k exp(k^2 beta^2 / 2)``, Cornell et al. 2002):
     ``shape = (factor / (median_sa_avg / median_pga))^k``, how the records' spectral shape
     at collapse differs from the code spectrum's, and ``spread = exp(k^2 (beta_sa_avg^2 -
-    beta_pga^2) / 2)``, the dispersions. None without a pga curve or a spectrum."""
+    beta_pga^2) / 2)``, the dispersions. None without a pga curve or a spectrum, or when no
+    diaphragm of the archive is one the comparison is shown on (`STIFFEN`: an own support)."""
     from .fragility.risk import scaled_curve
 
     if r is None or spectrum is None or r["curve"].im != "pga":
+        return None
+    if not any(FA.base_label(str(x)) in STIFFEN for x in ds.diaphragm.values):
         return None
     factor = sa_avg_factor(ds, spectrum)
     d = FA.first_cor(ds)
@@ -580,8 +581,6 @@ def im_comparison_lines(c: xr.Dataset | None) -> list[str]:
     if c is None:
         return []
     labs = [str(x) for x in c.diaphragm.values if FA.base_label(str(x)) in STIFFEN]
-    if not labs:  # no catalog diaphragm the comparison is made on (an own support)
-        return []
     rows = []
     for lab in labs:
         for w in c.wall.values:

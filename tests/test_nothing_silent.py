@@ -455,6 +455,48 @@ def test_a_second_and_third_ctrl_c_end_it_at_once_without_a_traceback(tmp_path):
     assert all(load_part(p, p.stem, ("status",)) is not None for p in parts.glob("*.npz"))
 
 
+def test_a_stop_dropped_in_a_gc_callback_still_stops_the_run(monkeypatch):
+    """The first Ctrl-C raises where the signal lands; in a GC callback (dask's GC
+    diagnosis) Python drops it with an "Exception ignored" message, and a run once went on
+    after a triple Ctrl-C (the three signals read as one). The ``urmx`` command's hook
+    drops such a stop without a word, and the loop that takes a study's batches raises it
+    again before the next batch; SIGTERM's stop stays a SIGTERM."""
+    import gc
+
+    from urmx import cli, errors
+    from urmx.study import engine
+
+    said = []
+    hook = cli._quiet_stops(lambda u: said.append(u.exc_type))
+
+    def callback(phase, info):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sys, "unraisablehook", hook)
+    gc.callbacks.append(callback)
+    try:
+        gc.collect()
+    finally:
+        gc.callbacks.remove(callback)
+    assert said == []  # dropped without a word
+    hook(type("U", (), {"exc_value": ValueError("x"), "exc_type": ValueError})())
+    assert said == [ValueError]  # anything else still reaches Python's hook
+
+    ran = []
+    tasks = [(type("B", (), {"record": 0})(), {}) for _ in range(3)]
+    records = {"r": type("R", (), {"acceleration": None})()}
+    run = (lambda task, acc: ran.append(1) or {})
+    monkeypatch.setattr(errors, "STOPS", [])
+    engine._here(tasks, records, ["r"], lambda b, r: None, run)
+    assert len(ran) == 3  # no stop asked: every batch runs
+    for sig, raised in ((signal.SIGINT, KeyboardInterrupt), (signal.SIGTERM, errors.Terminated)):
+        monkeypatch.setattr(errors, "STOPS", [sig])
+        ran.clear()
+        with pytest.raises(raised) as caught:
+            engine._here(tasks, records, ["r"], lambda b, r: None, run)
+        assert ran == [] and (caught.type is errors.Terminated) == (sig == signal.SIGTERM)
+
+
 def _children(pid: int) -> list[int]:
     """The PIDs of the worker processes of `pid` (its children, from /proc)."""
     found = []

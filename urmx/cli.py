@@ -22,6 +22,9 @@ import sys
 import threading
 from pathlib import Path
 
+from .errors import STOPS as _STOPS  # the Ctrl-C and SIGTERM received while a command runs
+from .errors import Terminated
+
 COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility",
             "risk", "uncertainty", "assess", "export", "show", "catalog")
 
@@ -52,14 +55,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread like Ctrl-C's KeyboardInterrupt, so that a
-    terminated run cleans up as an interrupted one does (its parts kept)."""
-
-
-_STOPS: list[int] = []  # the Ctrl-C and SIGTERM received while a command runs
-
-
 def _terminate(signum, frame) -> None:
     raise Terminated
 
@@ -76,6 +71,19 @@ def _again(command: str, out: str | None = None):
         _exit_now(command, signum, out)
 
     return handler
+
+
+def _quiet_stops(hook):
+    """An unraisable-exception hook that drops a stop (KeyboardInterrupt, `Terminated`)
+    raised where Python cannot propagate it (a GC callback, a ``__del__``) without a word:
+    the run's loops raise it again (`urmx.errors.stop_if_asked`); anything else goes to
+    `hook`."""
+    def hook_(unraisable) -> None:
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            return
+        hook(unraisable)
+
+    return hook_
 
 
 def _exit_now(command: str, signum: int, out: str | None = None) -> None:
@@ -115,6 +123,7 @@ def _sigterm_stops(command: str | None = None, out: str | None = None):
         yield
         return
     if command is not None:  # kept until the process ends: it ends with the command
+        sys.unraisablehook = _quiet_stops(sys.unraisablehook)
         signal.signal(signal.SIGTERM, _again(command, out))
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
             signal.signal(signal.SIGINT, _again(command, out))

@@ -41,6 +41,28 @@ class RunError(UrmxError, RuntimeError):
     reached, or the cluster lost its workers."""
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like Ctrl-C's KeyboardInterrupt, so that a
+    terminated run cleans up as an interrupted one does (its parts kept)."""
+
+
+STOPS: list[int] = []  # the Ctrl-C and SIGTERM the ``urmx`` command received (urmx.cli)
+
+
+def stop_if_asked() -> None:
+    """Raise the stop a Ctrl-C or SIGTERM asked for, again.
+
+    The ``urmx`` command's handler raises the first stop where the signal lands; when that
+    is a garbage-collector callback or a ``__del__`` (dask's GC diagnosis, a finalizer),
+    Python prints "Exception ignored" and drops it, and the run would go on. The loops that
+    wait for a study's batches call this between batches, so a dropped stop still stops
+    the run (urmx.cli keeps Python from printing it)."""
+    if STOPS:
+        import signal
+
+        raise Terminated if STOPS[0] == signal.SIGTERM else KeyboardInterrupt
+
+
 def check_output(path: str | os.PathLike, what: str = "--out", *, folder: bool = False,
                  inputs: Iterable[tuple[str, str | os.PathLike]] = (),
                  utf8: bool = False) -> Path:

@@ -76,7 +76,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..catalog import Study, load_study
-from ..errors import InputError, OutputError, RunError, check_output, got
+from ..errors import InputError, OutputError, RunError, check_output, got, stop_if_asked
 from ..netcdf import write_netcdf
 from ..provenance import differs
 from . import kinds
@@ -243,6 +243,7 @@ def _here(tasks: Iterable, records: dict, rec_ids: list[str], on_result: Callabl
           runner: Callable) -> Iterator:
     """Run `tasks` in this process, one at a time; nothing is left."""
     for batch, task in tasks:
+        stop_if_asked()
         on_result(batch, runner(task, records[rec_ids[batch.record]].acceleration))
     return iter(())
 
@@ -304,6 +305,7 @@ def _gather(futures: dict, on_result: Callable[[Batch, dict], None], watch: Watc
 
     arrived = fetch_all([f for f, _ in futures.values()])
     while futures:
+        stop_if_asked()
         try:
             f, outcome = arrived.get(timeout=watch.period / 2)
         except queue.Empty:

@@ -485,7 +485,11 @@ def test_a_stop_dropped_in_a_gc_callback_still_stops_the_run(monkeypatch):
     ran = []
     tasks = [(type("B", (), {"record": 0})(), {}) for _ in range(3)]
     records = {"r": type("R", (), {"acceleration": None})()}
-    run = (lambda task, acc: ran.append(1) or {})
+
+    def run(task, acc):
+        ran.append(1)
+        return {}
+
     monkeypatch.setattr(errors, "STOPS", [])
     engine._here(tasks, records, ["r"], lambda b, r: None, run)
     assert len(ran) == 3  # no stop asked: every batch runs

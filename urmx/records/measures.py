@@ -113,19 +113,44 @@ def _fas(acc, dt):
 
 
 def _konno_ohmachi(freq, amp, centres, bandwidth):
-    """Konno-Ohmachi smoothing of ``amp(freq)`` evaluated at ``centres`` (vectorised)."""
+    """Konno-Ohmachi smoothing of ``amp(freq)`` evaluated at ``centres``.
+
+    The window is ``(sin x / x)^4``, ``x = b log10(f / fc)`` (Konno & Ohmachi 1998, BSSA
+    88(1), eq. 4). urmx keeps its main lobe, ``|x| <= pi`` (ObsPy's
+    ``konno_ohmachi_smoothing`` keeps the side lobes too, whose weights are below 2.3e-3),
+    so each centre sums only the FFT bins of its band ``fc 10^(+-pi/b)``: ``freq`` is
+    sorted, and the band's ends are found by bisection. That takes 1-10 % of the time of
+    the full weight matrix for records of 2,700-40,000 samples and gives the same result
+    to rounding (``_konno_ohmachi_full``, tests/test_records.py)."""
     ok = freq > 0
     f, a = freq[ok], amp[ok]
-    out = np.empty(centres.size)
-    for i0 in range(0, centres.size, 64):  # chunks keep the weight matrix small
-        fc = centres[i0:i0 + 64, None]
-        x = bandwidth * np.log10(f[None, :] / fc)
+    half = np.pi / bandwidth
+    lo = np.searchsorted(f, centres * 10.0 ** -half, side="left")
+    hi = np.searchsorted(f, centres * 10.0 ** half, side="right")
+    out = np.zeros(centres.size)
+    for i, (fc, i0, i1) in enumerate(zip(centres, lo, hi, strict=True)):
+        x = bandwidth * np.log10(f[i0:i1] / fc)
         with np.errstate(divide="ignore", invalid="ignore"):
             w = (np.sin(x) / x) ** 4
         w[np.abs(x) < 1e-12] = 1.0
         w[np.abs(x) > np.pi] = 0.0
-        out[i0:i0 + 64] = (w @ a) / np.maximum(w.sum(axis=1), 1e-300)
+        total = w.sum()
+        if total > 0:
+            out[i] = (w @ a[i0:i1]) / total
     return out
+
+
+def _konno_ohmachi_full(freq, amp, centres, bandwidth):
+    """`_konno_ohmachi` with the full weight matrix (every bin for every centre): the
+    yardstick the banded form is tested against."""
+    ok = freq > 0
+    f, a = freq[ok], amp[ok]
+    x = bandwidth * np.log10(f[None, :] / centres[:, None])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = (np.sin(x) / x) ** 4
+    w[np.abs(x) < 1e-12] = 1.0
+    w[np.abs(x) > np.pi] = 0.0
+    return (w @ a) / np.maximum(w.sum(axis=1), 1e-300)
 
 
 def smoothed_fourier_amplitude(acceleration, dt: float, frequencies=None,

@@ -252,6 +252,25 @@ def test_fourier_and_frequency_range_of_a_sine():
     assert float(fas.frequency[int(np.argmax(fas.values))]) == pytest.approx(f, rel=0.03)
 
 
+@pytest.mark.parametrize("n, dt", [(150, 0.02), (2688, 0.02), (10998, 0.0025)])
+def test_banded_konno_ohmachi_is_the_full_weight_matrix(n, dt):
+    """The banded smoothing (each centre sums only the bins of its main lobe) gives the
+    full weight matrix's result to rounding, zeros where it has zeros (no bin in a band);
+    a bandwidth that changes the band changes the result (the comparison can fail)."""
+    import importlib
+
+    M = importlib.import_module("urmx.records.measures")  # (urmx.records.measures is the function)
+
+    acc = np.random.default_rng(n).standard_normal(n)
+    freq, amp = M._fas(acc, dt)
+    centres = np.geomspace(0.05, 0.5 / dt, 300)
+    banded = M._konno_ohmachi(freq, amp, centres, 40.0)
+    full = M._konno_ohmachi_full(freq, amp, centres, 40.0)
+    assert np.array_equal(banded == 0, full == 0)
+    assert np.max(np.abs(banded - full)) <= 1e-13 * np.max(full)
+    assert np.max(np.abs(M._konno_ohmachi(freq, amp, centres, 20.0) - full)) > 1e-3 * np.max(full)
+
+
 def test_processing_steps_recorded(records_dir):
     tr = R.load("christchurch", records_dir)
     out = R.process(tr, freqmin=0.1, freqmax=25.0, dt=0.01, target_pga=0.185 * G_N)
@@ -309,6 +328,30 @@ def test_checksum_mismatch_and_missing_file(records_dir, tmp_path):
     R.write_manifest([entry], own)
     with pytest.raises(FileNotFoundError, match="gone/NS1-010.*maddyblue/slammer"):
         R.load("mine", tmp_path)
+
+
+def test_a_manifest_is_parsed_once_while_its_file_stays_the_same(tmp_path, monkeypatch):
+    """A study loads each record through the manifest: it is parsed and checked once, and
+    again as soon as its file changes (an edit of the same size is seen by its time);
+    what a caller changes in an entry does not reach the next caller."""
+    import importlib
+    import os
+
+    M = importlib.import_module("urmx.records.manifest")
+    parsed = []
+    parse = M._parse_manifest
+    own = tmp_path / "manifest.toml"
+    monkeypatch.setattr(M, "_parse_manifest",
+                        lambda src: (src == own and parsed.append(src)) or parse(src))
+    R.write_manifest([dict(R.manifest()["nahanni"], id="mine")], own)
+    first = M._read_manifest(own)
+    first[0]["dt"] = -1.0  # a caller's change stays its own
+    again = M._read_manifest(own)
+    assert len(parsed) == 1 and again[0]["dt"] == R.manifest()["nahanni"]["dt"]
+    st = own.stat()
+    own.write_text(own.read_text().replace('id = "mine"', 'id = "ours"'))
+    os.utime(own, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    assert [e["id"] for e in M._read_manifest(own)] == ["ours"] and len(parsed) == 2
 
 
 def test_shipped_records_are_the_manifests():

@@ -13,6 +13,7 @@ loadable by id.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
@@ -40,7 +41,25 @@ _REQUIRED = ("id", "set", "event", "file", "format", "dt", "unit", "sha256", "ex
              "scale_factor", "source", "notes")
 
 
+_PARSED: dict[str, tuple] = {}  # path -> ((mtime, size), its checked entries)
+
+
 def _read_manifest(src: Path) -> list[dict]:
+    """The checked entries of the manifest `src` (a copy: callers may change them).
+
+    A manifest is parsed and checked once while its file stays the same (path,
+    modification time and size): a study loads each of its records through it."""
+    try:
+        st = os.stat(src)
+    except OSError:
+        return _parse_manifest(src)  # its own error
+    where, stamp = os.fspath(Path(src).resolve()), (st.st_mtime_ns, st.st_size)
+    if _PARSED.get(where, (None,))[0] != stamp:
+        _PARSED[where] = (stamp, _parse_manifest(src))
+    return copy.deepcopy(_PARSED[where][1])
+
+
+def _parse_manifest(src: Path) -> list[dict]:
     try:
         data = tomllib.loads(src.read_text(encoding="utf-8"))
     except FileNotFoundError:

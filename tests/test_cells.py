@@ -674,6 +674,22 @@ def test_the_cut_covers_exactly_the_cells_to_run_in_bounded_blocks(grid, seed):
     np.testing.assert_array_equal(seen, (runs & ~done).astype(int))
 
 
+def test_the_cut_runs_the_records_of_one_time_step_together():
+    """A wall's kernel tables are per time step: the batches take the records of one step
+    together (in the study's order within a step), so a worker builds them once a step;
+    every cell is still cut once."""
+    class Stand:  # what Cut reads of urmx.study.cells.Cells
+        names, shape, record_axis = ["wall", "record", "cor"], (2, 4, 3), 1
+        record_dt = [0.02, 0.005, 0.01, 0.005]
+
+        def runnable(self):
+            return np.ones((2, 4), dtype=bool)
+
+    order = [b.record for b in Cut(Stand(), 3)]
+    assert [r for i, r in enumerate(order) if i == 0 or order[i - 1] != r] == [1, 3, 2, 0]
+    assert len(order) == 8 and all(order.count(r) == 2 for r in range(4))
+
+
 # ---- reuse for the other kinds of cells: IDA capacities and kept time histories -------------
 
 IDA = """\

@@ -4,12 +4,12 @@ A batch covers, for every dimension of its kind's cells, a list of indices (a bl
 grid), within one record: the record's samples travel to the worker once per record, not
 once per batch. :func:`cut` cuts the cells the way every kind runs, over every dimension
 (wall, diaphragm, record, cor, scale, impact, damping and the kind's own): records
-outermost; within a record, the walls the study pairs with it and every other dimension
-are cut into blocks of about ``batch_size`` cells, the innermost dimensions taken whole
-while they fit and the next one cut into even pieces. Only the cells still to run are cut:
-a block holding finished cells (found per cell, `urmx.study.cells`) is halved along its
-longest side until every block is all to run, so a resumed run computes no finished cell
-whatever the batches of the run before were.
+outermost, those of one time step together; within a record, the walls the study pairs
+with it and every other dimension are cut into blocks of about ``batch_size`` cells, the
+innermost dimensions taken whole while they fit and the next one cut into even pieces.
+Only the cells still to run are cut: a block holding finished cells (found per cell,
+`urmx.study.cells`) is halved along its longest side until every block is all to run, so
+a resumed run computes no finished cell whatever the batches of the run before were.
 """
 
 from __future__ import annotations
@@ -128,7 +128,10 @@ class Cut:
         c = self.cells
         pairs = c.runnable()
         iw = c.names.index("wall")
-        for r in range(c.shape[c.record_axis]):
+        # records of one time step together (stably): each worker builds a wall's kernel
+        # tables once per step (they are per wall and step, `urmx.kernel.tables`), not once
+        # per change of step
+        for r in sorted(range(c.shape[c.record_axis]), key=lambda r: c.record_dt[r]):
             walls = np.flatnonzero(pairs[:, r])
             if not len(walls):
                 continue

@@ -136,6 +136,9 @@ class Cells:
         self.code = {k: base[k] for k in ("kernel", "kernel_source", "urmx")}
         self.extras = self._extras()
         self.record_axis = self.names.index("record")
+        #: the records' time steps [s], in the study's order (`urmx.study.batches.Cut` runs
+        #: the records of one step together: a wall's kernel tables are per step)
+        self.record_dt = [float(records[r].dt) for r in study.records]
         self._pairs: np.ndarray | None = None
 
     def _extras(self) -> dict[int, str]:

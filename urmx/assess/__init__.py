@@ -54,7 +54,8 @@ from .demand import Position, RecordDemand, position_of, record_demand
 from .nzs1170 import DesignSpectrum
 from .result import Assessment, NotApplicable, Quantity
 
-#: name -> procedure(wall, demand, position=None, **options) -> Assessment, in report order
+#: name -> ``procedure(wall, demand, position=None, **options)`` returning an `Assessment`,
+#: in report order
 PROCEDURES: dict[str, Callable[..., Assessment]] = {}
 
 

@@ -65,3 +65,14 @@ html_theme_options = {
 html_static_path: list[str] = []
 templates_path = ["_templates"]
 html_show_sourcelink = False
+
+
+def _layout_page(app, docname, source):
+    """A page of the package tree, ``docs/layout.md``, joins the developer page's toctree
+    when it exists (the layout of the code is written there by whoever moves modules)."""
+    if docname == "developer" and (Path(app.srcdir) / "layout.md").is_file():
+        source[0] = source[0].replace("\nreadme-sections\n", "\nlayout\nreadme-sections\n", 1)
+
+
+def setup(app):
+    app.connect("source-read", _layout_page)

@@ -451,7 +451,7 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
         Seed of the resampling (the same seed gives the same intervals).
     im, units : str, optional
         The intensity measure and its units, kept on the fit.
-    groups : array_like, optional
+    groups : array_like of str or int, optional
         A label per capacity (station or event): the bootstrap resamples whole groups.
     unbiased : bool
         Scale the dispersion (and its interval) by ``sqrt(n / (n - 1))``.

@@ -312,9 +312,10 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
     channel : str, optional
         The channel to read; required for a file of several channels (the error lists
         them).
-    dt, unit, format, allow_unusual
+    dt, unit, format, allow_unusual, response
         As for :func:`read`: `dt` [s] and `unit` for files that do not state them; where
-        the file states them they must agree.
+        the file states them they must agree; `response`, a StationXML file whose
+        instrument response is removed.
 
     Returns
     -------

@@ -289,7 +289,7 @@ def diff(a: str | os.PathLike | xr.Dataset, b: str | os.PathLike | xr.Dataset,
     rtol : float
         Relative tolerance. [1]
     atol : float
-        Absolute tolerance, in each variable's units.
+        Absolute tolerance. [each variable's own units]
     listed : int
         Differing cells listed per variable (all are counted).
 

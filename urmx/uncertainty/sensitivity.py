@@ -125,9 +125,10 @@ def prcc(x, y, conf_level: float = CONF_LEVEL) -> dict[str, np.ndarray]:
     Parameters
     ----------
     x : array_like, shape (n, d)
-        The inputs of `n` runs (or their points of the unit hypercube).
+        The inputs of `n` runs (or their points of the unit hypercube). [each input's own
+        units, or 1 in the unit hypercube]
     y : array_like, shape (n,)
-        The output of each run. Runs with a NaN output are left out.
+        The output of each run. Runs with a NaN output are left out. [the output's units]
     conf_level : float
         Confidence of the intervals. [1]
 
@@ -184,10 +185,10 @@ def sobol_indices(unit, y, method: str, seed: int = 0, conf_level: float = CONF_
     Parameters
     ----------
     unit : array_like, shape (n, d)
-        The design's points of the unit hypercube (`urmx.uncertainty.Sampling.unit`), in
+        The design's points of the unit hypercube (`urmx.uncertainty.Sampling.unit`) [1], in
         its order.
     y : array_like, shape (n,)
-        The output of each point.
+        The output of each point. [the output's units]
     method : str
         The design's method: ``saltelli`` gives ``S1`` and ``ST`` by Saltelli's
         estimators; any other ``S1`` by RBD-FAST and ``ST`` NaN.

@@ -16,7 +16,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # document the code of this checkout, whatever is installed
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-import urmx  # noqa: E402
 from urmx.provenance import code_version  # noqa: E402
 
 project = "urmx"

@@ -60,7 +60,15 @@ PROCEDURES: dict[str, Callable[..., Assessment]] = {}
 
 
 def register(name: str, function: Callable[..., Assessment]) -> Callable[..., Assessment]:
-    """Add a procedure to `PROCEDURES` (the comparison and ``urmx assess`` run it)."""
+    """Add a procedure to `PROCEDURES` (the comparison and ``urmx assess`` run it).
+
+    Parameters
+    ----------
+    name : str
+        The procedure's name in `PROCEDURES`.
+    function : callable
+        ``procedure(wall, demand, position=None, **options)`` returning an `Assessment`.
+    """
     PROCEDURES[name] = function
     return function
 

@@ -99,6 +99,20 @@ def record_demand(record, scale: float = 1.0, periods=None, records_dir=None,
     [m s-2] with their step [s]) at `scale`, its spectrum computed once on `periods` [s]
     (default `RECORD_PERIODS`); `label` names it (default: the record's id).
 
+    Parameters
+    ----------
+    record : Record, str, path or (array, dt)
+        A `urmx.records.Record`, a manifest id, a record file, or samples [m s-2] with their
+        step [s].
+    scale : float
+        Factor on the record, > 0. [1]
+    periods : array_like of float, optional
+        Periods of its spectrum, positive and increasing (default `RECORD_PERIODS`). [s]
+    records_dir : str or path-like, optional
+        Records folder of a manifest id.
+    label : str, optional
+        Its name (default: the record's id).
+
     Raises
     ------
     urmx.errors.InputError
@@ -171,6 +185,14 @@ def position_of(wall: Wall, position: Position | str | None = None) -> Position:
     two diaphragms, the catalog's ``"D1/both"``) is the top storey of a two-storey building
     of equal storeys (base height h, building height 2h). These are urmx's choices, not a
     source's: give a `Position` for another building.
+
+    Parameters
+    ----------
+    wall : urmx.Wall
+        The wall and its supports.
+    position : Position, str or None
+        A `Position`, a storey name (``"one-storey"``, ``"first"``, ``"top"``, ``"other"``)
+        with the default heights, or None: what the supports imply.
     """
     if isinstance(position, Position):
         return position

@@ -62,6 +62,13 @@ class RecordDemand:
     kind: str = "record"
 
     def scaled(self, s: float) -> RecordDemand:
+        """The same record demand with its scale multiplied by `s`.
+
+        Parameters
+        ----------
+        s : float
+            Factor on the scale. [1]
+        """
         return RecordDemand(self.label, self.periods, self.psa, self.pga_unscaled,
                             self.scale * s)
 
@@ -72,7 +79,13 @@ class RecordDemand:
 
     def sa(self, period: float) -> float:
         """5 %-damped pseudo-spectral acceleration at `period` [s]; 0 gives the PGA; a
-        period outside the computed range raises `NotApplicable`. [m s-2]"""
+        period outside the computed range raises `NotApplicable`. [m s-2]
+
+        Parameters
+        ----------
+        period : float
+            Period; 0 gives the PGA. [s]
+        """
         t = float(period)
         if not math.isfinite(t) or t < 0.0:
             raise NotApplicable(f"record {self.label}: no spectrum at period {t!r} s")
@@ -86,10 +99,17 @@ class RecordDemand:
         return self.scale * float(np.exp(y))
 
     def sd(self, period: float) -> float:
-        """Spectral displacement ``sa (T / 2 pi)^2`` at `period` [s]. [m]"""
+        """Spectral displacement ``sa (T / 2 pi)^2`` at `period` [s]. [m]
+
+        Parameters
+        ----------
+        period : float
+            Period; 0 gives the PGA. [s]
+        """
         return self.sa(period) * (period / (2.0 * math.pi)) ** 2
 
     def describe(self) -> str:
+        """The record's label and scale, for reports (``record elcentro x 1.5``)."""
         return f"record {self.label} x {self.scale:g}"
 
 

@@ -111,6 +111,7 @@ class CollapseCapacity:
         self.scale = self.capacity / self.record_intensity
 
     def to_dict(self) -> dict[str, Any]:
+        """The capacity's fields as plain data (for JSON and reports)."""
         return {k: getattr(self, k) for k in (
             "capacity", "censored", "intensity", "instability_ratio", "collapsed", "analyses",
             "im", "units", "record_intensity", "scale", "event_limits")}

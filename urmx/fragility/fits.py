@@ -111,7 +111,13 @@ class LognormalFit:
 
     def probability(self, intensity) -> np.ndarray:
         """Probability of collapse at `intensity` (>= 0; NaN stays NaN) [units of the
-        intensity]. [1]"""
+        intensity]. [1]
+
+        Parameters
+        ----------
+        intensity : float or array_like of float
+            Intensity levels, >= 0. [units of the intensity]
+        """
         from scipy.stats import norm
 
         x = np.asarray(intensity, dtype=float)

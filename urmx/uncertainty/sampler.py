@@ -268,6 +268,7 @@ class Sampling:
             n = 2 * n if self.method == "sobol" else n + max(1, n // 16)
 
     def to_dict(self) -> dict[str, Any]:
+        """The settings as the ``[study.sampling]`` table they were read from."""
         out = {"samples": self.samples, "seed": self.seed, "method": self.method,
                "parameters": {k: d.to_dict() for k, d in self.parameters.items()}}
         if self.max_slenderness is not None:

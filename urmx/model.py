@@ -268,7 +268,13 @@ class Wall:
 
     def segment(self, case: int) -> Segment:
         """Trilinear data of segment case 1 (upper), 2 (lower, family 2) or 3 (lower,
-        family 1), MODEL.md section 3 / the paper's Tables I and III."""
+        family 1), MODEL.md section 3 / the paper's Tables I and III.
+
+        Parameters
+        ----------
+        case : {1, 2, 3}
+            The segment case of the paper's Table I.
+        """
         if case not in (1, 2, 3):
             raise InputError(f"segment case must be 1, 2 or 3, not {case!r}")
         i = P_CASE + 5 * (case - 1)
@@ -276,7 +282,13 @@ class Wall:
 
     def diaphragm_frequency(self, where: str = "top") -> float:
         """Indicative frequency of a diaphragm as an SDOF (Table IV footnote):
-        stiffness over (diaphragm mass + half the wall mass). [Hz]"""
+        stiffness over (diaphragm mass + half the wall mass). [Hz]
+
+        Parameters
+        ----------
+        where : {"top", "bottom"}
+            Which diaphragm.
+        """
         k = self.top_stiffness if where == "top" else self.bottom_stiffness
         md = self.top_mass if where == "top" else self.bottom_mass
         if k == RIGID:
@@ -293,6 +305,13 @@ class Wall:
         return d
 
     def replace(self, **changes: Any) -> Wall:
+        """A copy of the wall with some fields changed (checked as a new `Wall`).
+
+        Parameters
+        ----------
+        **changes
+            `Wall` fields and their new values, in the fields' units (``thickness=0.35`` [m]).
+        """
         d = self.to_dict()
         d.update(changes)
         return Wall(**d)

@@ -2,9 +2,13 @@
 versions of the libraries a study's numbers rest on, for archives and for checking that
 every worker of a cluster runs the same code.
 
-:func:`code_version` is the version an archive records (``urmx_version``): the package
-version, with a local label naming the git commit (``0.1.0+g7ab99c0``, ``.dirty`` when
-the package's files differ from it) when urmx runs from a git checkout. :func:`attrs` are
+:func:`code_version` is the version an archive records (``urmx_version``) and ``urmx
+--version`` prints: in a git checkout, the release of the nearest tag ``vX.Y.Z``
+(:func:`git_release`, read from git when asked, so an editable install does not keep the
+version it was installed with) with a local label naming the commit (``0.2.0+g7ab99c0``,
+``0.2.0.post3+g7ab99c0``, ``.dirty`` when the package's files differ from it); elsewhere
+the installed version, which setuptools-scm took from the tag when the package was built
+(its ``fallback_version`` when built outside git). :func:`attrs` are
 an archive's provenance attributes (:data:`ATTRS` names them). :func:`identity` is what a
 worker reports of itself, and :func:`differs` says whether a worker's results can be mixed
 with this process's (same urmx version, same sources of the whole package, :func:`source_hash`,
@@ -18,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import re
 import subprocess
 import sys
 from importlib import metadata
@@ -70,17 +75,39 @@ def git_commit() -> tuple[str, bool] | None:
     return commit, bool(status)
 
 
+#: a release tag and what ``git describe --long`` says of it: v0.2.0-3-g1a2b3c4
+_DESCRIBE = re.compile(r"v(\d+(?:\.\d+)*)-(\d+)-g[0-9a-f]+")
+
+
+@functools.lru_cache(maxsize=1)
+def git_release() -> str | None:
+    """The release of the checkout's nearest tag ``vX.Y.Z`` at or before HEAD, named as
+    setuptools-scm's ``post-release`` scheme names it (``pyproject.toml``): ``0.2.0`` at
+    the tagged commit, ``0.2.0.post3`` three commits after it; None outside a checkout or
+    without such a tag."""
+    if git_commit() is None:
+        return None
+    found = _DESCRIBE.fullmatch(_git("describe", "--tags", "--long", "--match", "v[0-9]*")
+                                or "")
+    if found is None:
+        return None
+    release, distance = found.group(1), int(found.group(2))
+    return release if distance == 0 else f"{release}.post{distance}"
+
+
 def code_version() -> str:
-    """The urmx version with the git commit as a local label when run from a checkout
-    (``0.1.0+g7ab99c0``, ``0.1.0+g7ab99c0.dirty``), else the package version."""
+    """The code that runs: in a git checkout, the release of the nearest tag
+    (:func:`git_release`; without a tag, the installed version's public part) with the
+    commit as a local label (``0.2.0+g7ab99c0``, ``0.2.0.post3+g7ab99c0.dirty``); else the
+    installed version (``urmx.__version__``)."""
     from . import __version__
 
     git = git_commit()
     if git is None:
         return __version__
     commit, dirty = git
-    sep = "." if "+" in __version__ else "+"
-    return f"{__version__}{sep}g{commit[:7]}" + (".dirty" if dirty else "")
+    release = git_release() or __version__.split("+")[0]
+    return f"{release}+g{commit[:7]}" + (".dirty" if dirty else "")
 
 
 @functools.lru_cache(maxsize=1)

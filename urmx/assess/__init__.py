@@ -54,12 +54,21 @@ from .demand import Position, RecordDemand, position_of, record_demand
 from .nzs1170 import DesignSpectrum
 from .result import Assessment, NotApplicable, Quantity
 
-#: name -> procedure(wall, demand, position=None, **options) -> Assessment, in report order
+#: name -> ``procedure(wall, demand, position=None, **options)`` returning an `Assessment`,
+#: in report order
 PROCEDURES: dict[str, Callable[..., Assessment]] = {}
 
 
 def register(name: str, function: Callable[..., Assessment]) -> Callable[..., Assessment]:
-    """Add a procedure to `PROCEDURES` (the comparison and ``urmx assess`` run it)."""
+    """Add a procedure to `PROCEDURES` (the comparison and ``urmx assess`` run it).
+
+    Parameters
+    ----------
+    name : str
+        The procedure's name in `PROCEDURES`.
+    function : callable
+        ``procedure(wall, demand, position=None, **options)`` returning an `Assessment`.
+    """
     PROCEDURES[name] = function
     return function
 

@@ -62,6 +62,13 @@ class RecordDemand:
     kind: str = "record"
 
     def scaled(self, s: float) -> RecordDemand:
+        """The same record demand with its scale multiplied by `s`.
+
+        Parameters
+        ----------
+        s : float
+            Factor on the scale. [1]
+        """
         return RecordDemand(self.label, self.periods, self.psa, self.pga_unscaled,
                             self.scale * s)
 
@@ -72,7 +79,13 @@ class RecordDemand:
 
     def sa(self, period: float) -> float:
         """5 %-damped pseudo-spectral acceleration at `period` [s]; 0 gives the PGA; a
-        period outside the computed range raises `NotApplicable`. [m s-2]"""
+        period outside the computed range raises `NotApplicable`. [m s-2]
+
+        Parameters
+        ----------
+        period : float
+            Period; 0 gives the PGA. [s]
+        """
         t = float(period)
         if not math.isfinite(t) or t < 0.0:
             raise NotApplicable(f"record {self.label}: no spectrum at period {t!r} s")
@@ -86,10 +99,17 @@ class RecordDemand:
         return self.scale * float(np.exp(y))
 
     def sd(self, period: float) -> float:
-        """Spectral displacement ``sa (T / 2 pi)^2`` at `period` [s]. [m]"""
+        """Spectral displacement ``sa (T / 2 pi)^2`` at `period` [s]. [m]
+
+        Parameters
+        ----------
+        period : float
+            Period; 0 gives the PGA. [s]
+        """
         return self.sa(period) * (period / (2.0 * math.pi)) ** 2
 
     def describe(self) -> str:
+        """The record's label and scale, for reports (``record elcentro x 1.5``)."""
         return f"record {self.label} x {self.scale:g}"
 
 
@@ -98,6 +118,20 @@ def record_demand(record, scale: float = 1.0, periods=None, records_dir=None,
     """The demand of a record (a `urmx.records.Record`, a manifest id, a file, or samples
     [m s-2] with their step [s]) at `scale`, its spectrum computed once on `periods` [s]
     (default `RECORD_PERIODS`); `label` names it (default: the record's id).
+
+    Parameters
+    ----------
+    record : Record, str, path or (array, dt)
+        A `urmx.records.Record`, a manifest id, a record file, or samples [m s-2] with their
+        step [s].
+    scale : float
+        Factor on the record, > 0. [1]
+    periods : array_like of float, optional
+        Periods of its spectrum, positive and increasing (default `RECORD_PERIODS`). [s]
+    records_dir : str or path-like, optional
+        Records folder of a manifest id.
+    label : str, optional
+        Its name (default: the record's id).
 
     Raises
     ------
@@ -171,6 +205,14 @@ def position_of(wall: Wall, position: Position | str | None = None) -> Position:
     two diaphragms, the catalog's ``"D1/both"``) is the top storey of a two-storey building
     of equal storeys (base height h, building height 2h). These are urmx's choices, not a
     source's: give a `Position` for another building.
+
+    Parameters
+    ----------
+    wall : urmx.Wall
+        The wall and its supports.
+    position : Position, str or None
+        A `Position`, a storey name (``"one-storey"``, ``"first"``, ``"top"``, ``"other"``)
+        with the default heights, or None: what the supports imply.
     """
     if isinstance(position, Position):
         return position

@@ -151,18 +151,43 @@ class DesignSpectrum:
                 + (f", N={self.N:g}" if self.N != 1.0 else ""))
 
     def scaled(self, s: float) -> DesignSpectrum:
+        """The same spectrum with its scale multiplied by `s`.
+
+        Parameters
+        ----------
+        s : float
+            Factor on the scale. [1]
+        """
         return DesignSpectrum(self.Z, self.site_class, self.R, self.N, self.scale * s)
 
     def coefficient(self, period: float) -> float:
-        """``C(T)`` at scale 1 (Eq. 3.1(1), ``Z R <= 0.7``). [1]"""
+        """``C(T)`` at scale 1 (Eq. 3.1(1), ``Z R <= 0.7``). [1]
+
+        Parameters
+        ----------
+        period : float
+            Period. [s]
+        """
         return spectral_shape(period, self.site_class) * min(self.Z * self.R, ZR_MAX) * self.N
 
     def sa(self, period: float) -> float:
-        """``scale C(T) g``. [m s-2]"""
+        """``scale C(T) g``. [m s-2]
+
+        Parameters
+        ----------
+        period : float
+            Period. [s]
+        """
         return self.scale * self.coefficient(period) * G
 
     def sd(self, period: float) -> float:
-        """``sa (T / 2 pi)^2``. [m]"""
+        """``sa (T / 2 pi)^2``. [m]
+
+        Parameters
+        ----------
+        period : float
+            Period. [s]
+        """
         return self.sa(period) * (period / (2.0 * math.pi)) ** 2
 
     @property
@@ -171,4 +196,5 @@ class DesignSpectrum:
         return self.sa(0.0)
 
     def describe(self) -> str:
+        """The spectrum's label and scale, for reports (``NZS 1170.5 ... x 1``)."""
         return f"{self.label} x {self.scale:g}"

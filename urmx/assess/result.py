@@ -47,6 +47,7 @@ class Quantity:
     ref: str = ""
 
     def to_dict(self) -> dict[str, Any]:
+        """Plain data for JSON (NaN as null, inf as the string ``"inf"``)."""
         return {"value": _json_number(self.value), "unit": self.unit,
                 "description": self.description, "ref": self.ref}
 
@@ -104,7 +105,19 @@ class Assessment:
     @classmethod
     def not_applicable(cls, procedure: str, source: str, reason: str,
                        quantities: dict[str, Quantity] | None = None) -> Assessment:
-        """The result of a check that cannot be made, with the one-line reason."""
+        """The result of a check that cannot be made, with the one-line reason.
+
+        Parameters
+        ----------
+        procedure : str
+            The procedure's name.
+        source : str
+            The document it comes from (document, section, equation).
+        reason : str
+            Why it cannot be applied, in one line.
+        quantities : dict of str to Quantity, optional
+            The quantities computed before it stopped.
+        """
         return cls(procedure=procedure, source=source, verdict=NOT_APPLICABLE,
                    quantities=dict(quantities or {}), reason=reason)
 

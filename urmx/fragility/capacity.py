@@ -111,6 +111,7 @@ class CollapseCapacity:
         self.scale = self.capacity / self.record_intensity
 
     def to_dict(self) -> dict[str, Any]:
+        """The capacity's fields as plain data (for JSON and reports)."""
         return {k: getattr(self, k) for k in (
             "capacity", "censored", "intensity", "instability_ratio", "collapsed", "analyses",
             "im", "units", "record_intensity", "scale", "event_limits")}
@@ -278,7 +279,38 @@ def cell_capacity(kernel, wall: Wall, acc: np.ndarray, dt: float, unit: float, i
                   start: float | None = None, label: str = "") -> CollapseCapacity:
     """`collapse_capacity` on validated inputs, numpy only: the samples `acc` as analysed
     [m s-2] at step `dt` [s], the record's intensity at scale 1 `unit` [units of the
-    measure] (a study's batches call it directly)."""
+    measure] (a study's batches call it directly).
+
+    Parameters
+    ----------
+    kernel : callable
+        Integrator with the signature of `urmx.kernel.run`.
+    wall : urmx.Wall
+        The wall and its supports.
+    acc : ndarray of float
+        The record's samples as analysed (times its scale factor). [m s-2]
+    dt : float
+        Their time step. [s]
+    unit : float
+        The record's intensity at scale 1, in the measure `im`. [units of the measure]
+    im : str
+        Intensity measure of the capacity (`IMS`).
+    cor : float
+        Coefficient of restitution, in (0, 1]. [1]
+    impact : {"scale", "contact"}
+        Impact law (MODEL.md section 8).
+    rtol : float
+        Relative width of the final bracket. [1]
+    step : float
+        Ratio of the hunt's geometric grid of scale factors, > 1. [1]
+    max_intensity : float
+        Highest intensity analysed; a wall surviving it is censored there.
+        [units of the measure]
+    start : float, optional
+        First intensity of the hunt (default as `collapse_capacity`). [units of the measure]
+    label : str
+        The cell, for messages.
+    """
     pga = float(np.max(np.abs(acc)))
     if not math.isfinite(pga):
         check_finite(acc, f"record {label!r}", dt)

@@ -111,7 +111,13 @@ class LognormalFit:
 
     def probability(self, intensity) -> np.ndarray:
         """Probability of collapse at `intensity` (>= 0; NaN stays NaN) [units of the
-        intensity]. [1]"""
+        intensity]. [1]
+
+        Parameters
+        ----------
+        intensity : float or array_like of float
+            Intensity levels, >= 0. [units of the intensity]
+        """
         from scipy.stats import norm
 
         x = np.asarray(intensity, dtype=float)
@@ -352,6 +358,23 @@ def bootstrap_lognormal(capacities, censored=None, resamples: int = RESAMPLES,
     (whole groups when `groups` is given; the same inputs and refusals), NaN where a
     resample admits no fit.
 
+    Parameters
+    ----------
+    capacities : array_like of float
+        Collapse intensities, as for `fit_lognormal`. [units of the intensity]
+    censored : array_like of bool, optional
+        True where the capacity is a lower bound.
+    resamples : int
+        Bootstrap resamples.
+    seed : int or None
+        Seed of the resampling.
+    groups : array_like of str or int, optional
+        A label per capacity: whole groups are resampled.
+    unbiased : bool
+        Scale the dispersions by ``sqrt(n / (n - 1))``.
+    jackknife : bool
+        Also return the leave-one-group-out estimates (for BCa intervals).
+
     Returns
     -------
     (ndarray, ndarray) or (ndarray, ndarray, ndarray, ndarray)
@@ -451,7 +474,7 @@ def fit_lognormal(capacities, censored=None, *, confidence: float = CONFIDENCE,
         Seed of the resampling (the same seed gives the same intervals).
     im, units : str, optional
         The intensity measure and its units, kept on the fit.
-    groups : array_like, optional
+    groups : array_like of str or int, optional
         A label per capacity (station or event): the bootstrap resamples whole groups.
     unbiased : bool
         Scale the dispersion (and its interval) by ``sqrt(n / (n - 1))``.
@@ -678,6 +701,15 @@ def stripe_counts(capacities, censored, levels) -> tuple[np.ndarray, np.ndarray]
 
     A censored capacity ``c`` says nothing at levels above ``c``: those records are not
     counted there. Refuses what `fit_lognormal` refuses.
+
+    Parameters
+    ----------
+    capacities : array_like of float
+        Collapse capacities, one per record. [units of the intensity]
+    censored : array_like of bool
+        True where the capacity is a lower bound.
+    levels : array_like of float
+        The intensity levels (stripes). [units of the intensity]
 
     Returns
     -------

@@ -66,7 +66,13 @@ __all__ = ["IMS", "IM_ATTRS", "RECORD_IMS", "DAMPING", "MAX_INTENSITY", "SA_AVG_
 
 
 def check_im(im: str) -> None:
-    """Refuse a name that is not an intensity measure (an `urmx.errors.InputError`)."""
+    """Refuse a name that is not an intensity measure (an `urmx.errors.InputError`).
+
+    Parameters
+    ----------
+    im : str
+        The name to check against `IMS`.
+    """
     if im not in IMS:
         raise InputError(f"im={im!r} is not an intensity measure; use one of "
                          f"{', '.join(map(repr, IMS))}")
@@ -74,7 +80,13 @@ def check_im(im: str) -> None:
 
 def sa_avg_range(wall: Wall) -> tuple[float, float]:
     """The default period range of ``sa_avg`` for a wall (module docstring):
-    ``[max(min(T_d, T_r) / sqrt 2, T_r / 2), sqrt 2 max(T_d, T_r)]``. [s]"""
+    ``[max(min(T_d, T_r) / sqrt 2, T_r / 2), sqrt 2 max(T_d, T_r)]``. [s]
+
+    Parameters
+    ----------
+    wall : urmx.Wall
+        The wall and its supports.
+    """
     from .mechanism import wall_argument
 
     wall_argument("sa_avg_range", wall)
@@ -85,7 +97,17 @@ def sa_avg_range(wall: Wall) -> tuple[float, float]:
 def sa_avg_periods(wall: Wall | None = None, period_range=None,
                    n: int = SA_AVG_PERIODS) -> np.ndarray:
     """The periods ``sa_avg`` averages over: `n` log-spaced over `period_range` [s], or over
-    the wall's default range (:func:`sa_avg_range`). [s]"""
+    the wall's default range (:func:`sa_avg_range`). [s]
+
+    Parameters
+    ----------
+    wall : urmx.Wall, optional
+        The wall whose default range is used when `period_range` is not given.
+    period_range : (float, float), optional
+        The range of periods. [s]
+    n : int
+        Number of periods.
+    """
     if period_range is None:
         if wall is None:
             raise InputError("im='sa_avg' needs the wall (its periods) or a period_range")
@@ -127,7 +149,21 @@ def record_intensities(acceleration, dt: float, im: str, walls,
                        period_range=None) -> np.ndarray:
     """`record_intensity` of one record's samples [m s-2] at time step `dt` [s] for several
     walls at once (one pass of the response spectrum over all their periods), numpy only.
-    [units of the measure]"""
+    [units of the measure]
+
+    Parameters
+    ----------
+    acceleration : array_like of float
+        The record's samples as analysed. [m s-2]
+    dt : float
+        Their time step. [s]
+    im : str
+        Intensity measure (`IMS`).
+    walls : sequence of urmx.Wall
+        The walls whose periods the spectral measures use.
+    period_range : (float, float), optional
+        Periods of ``sa_avg`` instead of each wall's default range. [s]
+    """
     from ..errors import numbers_argument
 
     acc = numbers_argument("record_intensities", "acceleration", acceleration)
@@ -147,7 +183,19 @@ def record_intensities(acceleration, dt: float, im: str, walls,
 def record_measures(acceleration, dt: float, walls, period_range=None) -> dict[str, np.ndarray]:
     """Every measure of `RECORD_IMS` of one record's samples [m s-2] at step `dt` [s] for
     several walls, in one pass of the response spectrum over all their periods, numpy
-    only: measure -> array over `walls`. [units of each measure]"""
+    only: measure -> array over `walls`. [units of each measure]
+
+    Parameters
+    ----------
+    acceleration : array_like of float
+        The record's samples as analysed. [m s-2]
+    dt : float
+        Their time step. [s]
+    walls : sequence of urmx.Wall
+        The walls whose periods the spectral measures use.
+    period_range : (float, float), optional
+        Periods of ``sa_avg`` instead of each wall's default range. [s]
+    """
     from ..errors import numbers_argument
 
     acc = numbers_argument("record_measures", "acceleration", acceleration)
@@ -166,7 +214,15 @@ def record_measures(acceleration, dt: float, walls, period_range=None) -> dict[s
 
 def spectral_intensities(record: Any, periods) -> np.ndarray:
     """5 %-damped pseudo-spectral accelerations of a record as analysed (times its own scale
-    factor) at `periods` [s] (0: the PGA), in one pass of the exact recursion. [m s-2]"""
+    factor) at `periods` [s] (0: the PGA), in one pass of the exact recursion. [m s-2]
+
+    Parameters
+    ----------
+    record : Record, obspy.Trace, str or (array, dt)
+        The record (`urmx.records.as_record`), analysed times its own scale factor.
+    periods : array_like of float
+        Periods of the spectral accelerations (0: the PGA). [s]
+    """
     rec = as_record(record)
     return _spectral(rec.scaled(), rec.dt, periods)
 

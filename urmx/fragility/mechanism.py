@@ -32,7 +32,16 @@ def wall_argument(function: str, wall: object) -> None:
 def trilinear(segment, theta: float) -> float:
     """Trilinear resistance R(theta) of a segment case (`urmx.Wall.segment`; MODEL.md
     section 3): linear to ``theta_a``, the plateau ``Mi`` to ``theta_b``, then softening to
-    zero at ``theta0``. [N m]"""
+    zero at ``theta0``. [N m]
+
+    Parameters
+    ----------
+    segment : urmx.model.Segment
+        The segment case (`urmx.Wall.segment`): ``M0`` [N m], ``Mi`` [N m], ``theta0``,
+        ``theta_a``, ``theta_b`` [rad].
+    theta : float
+        The segment's tilt. [rad]
+    """
     a = abs(theta)
     s = 1.0 if theta >= 0 else -1.0
     if a <= segment.theta_a:
@@ -92,7 +101,13 @@ def static_acceleration(wall: Wall) -> float:
     restoring moment over the ground coupling ``m a1 / 2``. [m s-2]
 
     The restoring moment is piecewise linear in theta1, so its peak lies at a corner of
-    one of the two trilinear curves (or at the instability rotation)."""
+    one of the two trilinear curves (or at the instability rotation).
+
+    Parameters
+    ----------
+    wall : urmx.Wall
+        The wall and its supports.
+    """
     wall_argument("static_acceleration", wall)
     _, coupling, restoring, theta_ins, pinned = pinned_mechanism(wall)
     k = pinned.a1 / pinned.a2
@@ -102,7 +117,13 @@ def static_acceleration(wall: Wall) -> float:
 
 
 def diaphragm_period(wall: Wall) -> float:
-    """Period of the top support, ``1 / wall.diaphragm_frequency("top")``; 0 when rigid. [s]"""
+    """Period of the top support, ``1 / wall.diaphragm_frequency("top")``; 0 when rigid. [s]
+
+    Parameters
+    ----------
+    wall : urmx.Wall
+        The wall and its supports.
+    """
     wall_argument("diaphragm_period", wall)
     f = wall.diaphragm_frequency("top")
     return 0.0 if math.isinf(f) else 1.0 / f

@@ -504,6 +504,11 @@ class DesignSpectrum:
 def read_spectrum(path: str | os.PathLike) -> DesignSpectrum:
     """A design spectrum from a CSV file ``period [s],sa [g]`` (or ``sa [m s-2]``).
 
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file.
+
     Raises
     ------
     urmx.errors.InputError

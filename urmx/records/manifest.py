@@ -262,7 +262,20 @@ def load_samples(record_id: str, records_dir: str | os.PathLike | None = None, *
     """:func:`load` without ObsPy: the record as :class:`urmx.records.readers.Samples`
     (``data`` in m s-2, ``dt``, ``record`` with the manifest entry's id, set, scale_factor,
     paper_scale_factor and sha256). Same arguments, checks and errors as :func:`load`; the
-    file is read once."""
+    file is read once.
+
+    Parameters
+    ----------
+    record_id : str
+        Manifest id, as for :func:`load`.
+    records_dir : str or path-like, optional
+        Folder the manifest's ``file`` entries are resolved against (default
+        :func:`urmx.config.records_dir`).
+    channel : str, optional
+        The channel of a multi-channel file whose entry names none.
+    manifest : str or path-like, optional
+        Another manifest file, read alone.
+    """
     from .errors import RecordError
     from .readers import read_file, same_channel, stated_by_format
 
@@ -439,7 +452,18 @@ def _toml(value) -> str:
 
 def write_manifest(entries: list[dict], path: str | os.PathLike, comment: str = "") -> Path:
     """Write manifest entries as ``[[record]]`` tables of a TOML file (the schema of
-    ``records/manifest.toml``), `comment` as ``#`` lines on top. Returns the path."""
+    ``records/manifest.toml``), `comment` as ``#`` lines on top. Returns the path.
+
+    Parameters
+    ----------
+    entries : list of dict
+        One dict per record, with the keys of a ``[[record]]`` table (``id``, ``file``,
+        ``sha256``, ``dt`` [s], ``unit``, ``scale_factor`` [1], ...).
+    path : str or path-like
+        The TOML file to write.
+    comment : str
+        Text written as ``#`` lines on top.
+    """
     from ..errors import path_argument
 
     path_argument("write_manifest", "path", path)

@@ -83,7 +83,13 @@ def _cumtrapz(y, dt):
 
 
 def arias_history(trace) -> np.ndarray:
-    """Cumulative Arias intensity ``pi / (2 g) * integral a^2 dt`` at each sample [m s-1]."""
+    """Cumulative Arias intensity ``pi / (2 g) * integral a^2 dt`` at each sample [m s-1].
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    """
     acc, dt = _series(trace)
     return np.pi / (2.0 * STANDARD_GRAVITY) * _cumtrapz(acc * acc, dt)
 
@@ -96,7 +102,16 @@ def _crossing(t, y, level):
 
 
 def significant_duration(trace, start: float = 0.05, end: float = 0.95) -> float:
-    """Time between ``start`` and ``end`` fractions of the Arias intensity (D5-95) [s]."""
+    """Time between ``start`` and ``end`` fractions of the Arias intensity (D5-95) [s].
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    start, end : float
+        Fractions of the total Arias intensity that bound the duration (0.05 and 0.95: the
+        D5-95 duration). [1]
+    """
     ia = arias_history(trace)
     t = np.arange(ia.size) * trace.stats.delta
     return _crossing(t, ia, end * ia[-1]) - _crossing(t, ia, start * ia[-1])
@@ -221,7 +236,13 @@ def significant_frequency_range(trace, low: float = 0.05, high: float = 0.95):
 
 
 def predominant_frequency(trace) -> float:
-    """Frequency of the peak of the smoothed Fourier amplitude spectrum [Hz]."""
+    """Frequency of the peak of the smoothed Fourier amplitude spectrum [Hz].
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    """
     return dominant_frequency(*_series(trace))
 
 
@@ -309,6 +330,17 @@ def sdof_displacement(acc, dt: float, period: float, damping: float = 0.05) -> n
     """Relative displacement history [m] of a linear oscillator under ground acceleration.
 
     Exact for piecewise-linear ``acc`` [m s-2] sampled at ``dt`` [s]; starts at rest.
+
+    Parameters
+    ----------
+    acc : array_like of float
+        Ground acceleration, linear between samples. [m s-2]
+    dt : float
+        Time step of `acc`. [s]
+    period : float
+        Natural period of the oscillator, > 0. [s]
+    damping : float
+        Ratio of critical damping. [1]
     """
     from ..errors import numbers_argument
 

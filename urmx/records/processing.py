@@ -45,7 +45,15 @@ def baseline(trace, order: int = 0):
 
 
 def taper(trace, fraction: float = 0.05):
-    """Cosine (Hann) taper of ``fraction`` of the record at each end. [1]"""
+    """Cosine (Hann) taper of ``fraction`` of the record at each end. [1]
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    fraction : float
+        Share of the record's length tapered at each end. [1]
+    """
     tr = _trace(trace).copy()
     tr.taper(max_percentage=fraction, type="hann")
     return tr
@@ -74,7 +82,15 @@ def bandpass(trace, freqmin: float = 0.1, freqmax: float = 25.0, corners: int = 
 
 
 def resample(trace, dt: float):
-    """Resample to time step ``dt`` [s] (anti-aliased, ObsPy ``resample``/``interpolate``)."""
+    """Resample to time step ``dt`` [s] (anti-aliased, ObsPy ``resample``/``interpolate``).
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    dt : float
+        The new time step. [s]
+    """
     tr = _trace(trace).copy()
     if np.isclose(tr.stats.delta, dt, rtol=1e-9):
         return tr
@@ -87,6 +103,15 @@ def resample(trace, dt: float):
 
 def scale(trace, factor: float | None = None, target_pga: float | None = None):
     """Scale by ``factor`` [1] or so that the PGA equals ``target_pga`` [m s-2].
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    factor : float, optional
+        Factor applied to the samples. [1]
+    target_pga : float, optional
+        The PGA the scaled record has, instead of `factor`. [m s-2]
 
     Returns
     -------
@@ -114,7 +139,26 @@ def process(trace, demean: bool = True, taper_fraction: float | None = 0.05,
             freqmin: float | None = None, freqmax: float | None = None,
             dt: float | None = None, factor: float | None = None,
             target_pga: float | None = None):
-    """The usual chain: baseline, taper, band-pass, resample, scale (each step optional)."""
+    """The usual chain: baseline, taper, band-pass, resample, scale (each step optional).
+
+    Parameters
+    ----------
+    trace : obspy.Trace
+        The record, acceleration [m s-2].
+    demean : bool
+        Remove the mean (:func:`baseline` of order 0).
+    taper_fraction : float or None
+        Share of the length tapered at each end (:func:`taper`); None or 0: no taper. [1]
+    freqmin, freqmax : float, optional
+        Corners of the band-pass (:func:`bandpass`); either alone filters from 0.05 Hz or
+        to 0.95 of the Nyquist frequency. [Hz]
+    dt : float, optional
+        Resample to this time step (:func:`resample`). [s]
+    factor : float, optional
+        Scale by this factor (:func:`scale`). [1]
+    target_pga : float, optional
+        Scale to this PGA instead (:func:`scale`). [m s-2]
+    """
     tr = trace
     if demean:
         tr = baseline(tr, 0)

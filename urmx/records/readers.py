@@ -221,7 +221,25 @@ def read_channel(path: str | os.PathLike, format: str | None = None, dt: float |
                  response: str | os.PathLike | None = None) -> Samples:
     """One channel of a record file as :class:`Samples`: `channel`, or the file's only
     one; a multi-channel file without `channel` is a :class:`ChannelError` listing its
-    channels (never a silent first channel). Otherwise as :func:`read_samples`."""
+    channels (never a silent first channel). Otherwise as :func:`read_samples`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The record file.
+    format : str, optional
+        Its format, as for :func:`read`; found from the file's first bytes if omitted.
+    dt : float, optional
+        Time step for files that do not state it; must agree where the file states one. [s]
+    unit : {"g", "m/s2", "cm/s2", "mm/s2"}, optional
+        Unit of the values for files that do not state it; must agree where one is stated.
+    channel : str, optional
+        The channel to read; required for a file of several channels.
+    allow_unusual : bool
+        Read a record outside the plausible time steps, peaks and sizes (as :func:`read`).
+    response : str or path-like, optional
+        A StationXML file whose instrument response is removed (as :func:`read`).
+    """
     from ..errors import path_argument
 
     path_argument("read_channel", "path", path)
@@ -312,9 +330,10 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
     channel : str, optional
         The channel to read; required for a file of several channels (the error lists
         them).
-    dt, unit, format, allow_unusual
+    dt, unit, format, allow_unusual, response
         As for :func:`read`: `dt` [s] and `unit` for files that do not state them; where
-        the file states them they must agree.
+        the file states them they must agree; `response`, a StationXML file whose
+        instrument response is removed.
 
     Returns
     -------
@@ -340,7 +359,21 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
 def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str | None = None,
                  format: str | None = None, allow_unusual: bool = False) -> list[RecordFile]:
     """Every channel of a record file as a :class:`RecordFile`, reading the file once (same
-    arguments and errors as :func:`describe`)."""
+    arguments and errors as :func:`describe`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The record file.
+    dt : float, optional
+        Time step for files that do not state it; must agree where the file states one. [s]
+    unit : {"g", "m/s2", "cm/s2", "mm/s2"}, optional
+        Unit of the values for files that do not state it.
+    format : str, optional
+        Its format, as for :func:`read`; found from the file's first bytes if omitted.
+    allow_unusual : bool
+        Read a record outside the plausible time steps, peaks and sizes (as :func:`read`).
+    """
     from ..errors import path_argument
 
     path_argument("describe_all", "path", path)
@@ -1602,6 +1635,17 @@ def check_finite(data, label: str = "record", dt: float | None = None,
 
     Use it wherever samples arrive from outside (a Trace, an array): a NaN must be named as
     such, never taken for a zero.
+
+    Parameters
+    ----------
+    data : array_like of float
+        The samples. [any unit: they are only checked]
+    label : str
+        What the samples are, for the message (``"record"``).
+    dt : float, optional
+        Their time step, to name the time of the first bad sample. [s]
+    path : str or path-like, optional
+        The file they came from, for the message.
     """
     from ..errors import numbers_argument
 

@@ -112,7 +112,19 @@ class Record:
         """A Record of an ObsPy Trace's samples (as given) and time step; its provenance
         from what the reader and the manifest put in ``stats`` (``stats.record``: format,
         unit in the file, sha256; ``stats.channel``, ``stats.processing``), where a
-        `provenance` field given here wins."""
+        `provenance` field given here wins.
+
+        Parameters
+        ----------
+        trace : obspy.Trace
+            The samples [m s-2] and their time step.
+        id : str, optional
+            The record's id (default: from ``stats.record`` or the trace's id).
+        scale_factor : float
+            The record's own scale factor. [1]
+        **provenance
+            Provenance fields that win over the trace's.
+        """
         stats = trace.stats
         got = stats.get("record") or {}
         found = dict(sha256=got.get("sha256") or "", format=got.get("format") or "",
@@ -126,7 +138,19 @@ class Record:
     @classmethod
     def from_file(cls, rf, id: str, scale_factor: float = 1.0, **provenance: Any) -> Record:
         """A Record of one channel of a record file as `urmx.records.describe` gives it
-        (a `urmx.records.RecordFile`: samples, dt and their provenance)."""
+        (a `urmx.records.RecordFile`: samples, dt and their provenance).
+
+        Parameters
+        ----------
+        rf : urmx.records.RecordFile
+            One channel of a file, as `urmx.records.describe` gives it.
+        id : str
+            The record's id.
+        scale_factor : float
+            The record's own scale factor. [1]
+        **provenance
+            Provenance fields that win over the file's.
+        """
         found = dict(file=rf.name, sha256=rf.sha256, format=rf.format, channel=rf.channel,
                      unit=rf.unit, processing=rf.processing)
         found.update(provenance)

@@ -26,6 +26,15 @@ def open_study(path: str | os.PathLike, chunks: Any = None, keys: bool = False) 
     a CF ``_FillValue`` that xarray masks. Archives written before urmx stored them so are
     masked here by the kind they belong to (each kind's ``reopen``; a grid's by
     ``status``, for example).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The archive (netCDF).
+    chunks : dict, int, "auto" or None
+        As for `xarray.open_dataset`; None: the archive's own chunks.
+    keys : bool
+        Keep the cells' identities (``cell_key``).
     """
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"open_study: path={path!r} must be a file name (str or path), not "

@@ -149,18 +149,36 @@ class Cells:
                 for index, label in self.kind.extras(self.study).items()}
 
     def flat_of(self, index: tuple[int, ...]) -> int:
-        """The flat (C-order) index of one cell given by its index on each dimension."""
+        """The flat (C-order) index of one cell given by its index on each dimension.
+
+        Parameters
+        ----------
+        index : tuple of int
+            The cell's index on each dimension.
+        """
         return int(sum(i * s for i, s in zip(index, self.strides, strict=True)))
 
     def flat(self, block: list) -> np.ndarray:
         """Flat indices of a block's cells (a list of index lists, one per dimension), in
-        the block's shape."""
+        the block's shape.
+
+        Parameters
+        ----------
+        block : list of list of int
+            The block's index list on each dimension.
+        """
         grids = np.ix_(*[np.asarray(ix, dtype=np.int64) for ix in block])
         return sum((g * s for g, s in zip(grids, self.strides, strict=True)),
                    np.zeros((1,) * len(block), dtype=np.int64))
 
     def keys(self, block: list) -> np.ndarray:
-        """The keys of a block's cells, in the block's shape (uint64)."""
+        """The keys of a block's cells, in the block's shape (uint64).
+
+        Parameters
+        ----------
+        block : list of list of int
+            The block's index list on each dimension.
+        """
         k = self.base
         for hashes, ix in zip(self.hashes, block, strict=True):
             k = mix(k[..., None] ^ hashes[np.asarray(ix, dtype=np.int64)])
@@ -181,7 +199,13 @@ class Cells:
         return self._pairs
 
     def runs(self, block: list) -> np.ndarray:
-        """Whether the study runs each cell of a block (block shape)."""
+        """Whether the study runs each cell of a block (block shape).
+
+        Parameters
+        ----------
+        block : list of list of int
+            The block's index list on each dimension.
+        """
         iw, ir = self.names.index("wall"), self.record_axis
         sub = self.runnable()[np.ix_(np.asarray(block[iw], dtype=np.int64),
                                      np.asarray(block[ir], dtype=np.int64))]

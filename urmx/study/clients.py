@@ -53,7 +53,14 @@ _ADDRESS = re.compile(r"^[a-z][a-z0-9+.-]*://\S+$")
 
 
 def check_scheduler(scheduler: Any) -> None:
-    """Refuse a scheduler argument that is none of the accepted kinds (module docstring)."""
+    """Refuse a scheduler argument that is none of the accepted kinds (module docstring).
+
+    Parameters
+    ----------
+    scheduler : None, str or distributed.Client
+        As `urmx.run_study` takes it: None, ``"serial"``, ``"threads"``, ``"processes"``, a
+        scheduler address or a Client.
+    """
     if scheduler is None:
         return
     if hasattr(scheduler, "submit"):
@@ -196,6 +203,11 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
     client) or "processes" start local worker processes, "threads" a threaded local
     worker, any other string connects to that scheduler address (owned True: the caller
     closes it with :func:`close_client`).
+
+    Parameters
+    ----------
+    scheduler : None, str or distributed.Client
+        As `urmx.run_study` takes it (but ``"serial"``, which needs no client).
 
     Raises
     ------
@@ -464,7 +476,13 @@ def release(client: Any, owned: bool, pending: list) -> None:
 def close_client(client: Any) -> None:
     """Close a client and the local cluster it started, if any (quietly: workers stopped on
     purpose are not errors, and a scheduler closed while results are still on their way
-    would log each one)."""
+    would log each one).
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The client (from :func:`get_client`, owned).
+    """
     cluster = getattr(client, "cluster", None)
     previous = logging.root.manager.disable
     logging.disable(logging.CRITICAL)

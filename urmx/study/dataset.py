@@ -41,7 +41,13 @@ def status_attrs() -> dict[str, Any]:
 
 
 def status_names(status: xr.DataArray) -> xr.DataArray:
-    """The status codes of a study as strings (``ok``, ``collapsed``, ...)."""
+    """The status codes of a study as strings (``ok``, ``collapsed``, ...).
+
+    Parameters
+    ----------
+    status : xarray.DataArray
+        A grid study's ``status`` codes (`STATUS`).
+    """
     import xarray as xr
 
     return xr.apply_ufunc(lambda a: np.asarray(STATUS, dtype=object)[a], status,
@@ -61,7 +67,17 @@ def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any
     (``study_name``, ``study``: the study file's text; ``t_rest``, the rest time of held
     joints, MODEL.md section 4) and how it was made
     (`urmx.provenance.attrs`: ``urmx_version`` with the git commit, ``urmx_git_commit``,
-    ``urmx_git_dirty``, ``kernel_source_hash`` and the Python and library versions)."""
+    ``urmx_git_dirty``, ``kernel_source_hash`` and the Python and library versions).
+
+    Parameters
+    ----------
+    study : urmx.catalog.Study
+        The study, as loaded from its file.
+    started : str
+        When the run started (ISO 8601).
+    command : str or None
+        The command that ran it; None: ``urmx.run_study(NAME)``.
+    """
     from .. import __version__
     from ..provenance import attrs
 
@@ -184,7 +200,15 @@ def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
 
 def grid_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
     """Coordinates of the wall, diaphragm, record and cor dimensions, with the items'
-    properties (shared by every study kind)."""
+    properties (shared by every study kind).
+
+    Parameters
+    ----------
+    study : urmx.catalog.Study
+        The study, as loaded from its file.
+    records : dict
+        The study's records by id (:func:`resolve_records`).
+    """
     coords = {**_wall_coords(study), **_diaphragm_coords(study), **_record_coords(study, records),
               "cor": coord("cor", "cor", np.array(study.dims["cor"], dtype=np.float64))}
     if "supports" in coords:  # after cor, where it always stood

@@ -199,6 +199,23 @@ def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
     again elsewhere (up to its ``allowed-failures``), and the record samples are tasks it
     can recompute. Batches go to dask a window at a time (:func:`_window`), so the
     scheduler, the workers and this process hold few of them at once.
+
+    Parameters
+    ----------
+    tasks : list of (Batch, dict)
+        The batches to run and each one's task (what the kind's ``run`` takes).
+    records : dict
+        The study's records by id (:func:`resolve_records`), whose ``acceleration`` a batch
+        runs on.
+    rec_ids : list of str
+        The record ids in the order of the study's record dimension (``Batch.record`` indexes
+        it).
+    scheduler : None, str or distributed.Client
+        Where the batches run, as `urmx.run_study` takes it.
+    on_result : callable
+        Called with each batch and its result as it arrives.
+    runner : callable
+        The kind's ``run(task, acceleration)``.
     """
     _compute_all(iter(tasks), sum(b.size for b, _ in tasks), records, rec_ids, scheduler,
                  on_result, runner)

@@ -77,6 +77,13 @@ def size_of(study: Any, kind: Any) -> Size:
 
     The archive's bytes are the kind's ``cell_bytes(study)`` per cell (its outputs as
     stored, default 8 bytes per output) plus the 8-byte cell identity (``cell_key``).
+
+    Parameters
+    ----------
+    study : urmx.catalog.Study
+        The study, as loaded from its file.
+    kind : urmx.study.kinds.Kind
+        Its kind.
     """
     sizes = {k: len(v) for k, v in kind.cell_dims(study).items()}
     cells = math.prod(sizes.values())
@@ -90,6 +97,17 @@ def size_of(study: Any, kind: Any) -> Size:
 def check_size(study: Any, kind: Any, max_cells: float | None = MAX_CELLS,
                max_gb: float | None = MAX_GB) -> Size:
     """The study's :func:`size_of`, or a `SizeError` when it passes a limit (None: no limit).
+
+    Parameters
+    ----------
+    study : urmx.catalog.Study
+        The study, as loaded from its file.
+    kind : urmx.study.kinds.Kind
+        Its kind.
+    max_cells : float or None
+        Most cells a study may have; None: no limit. [1]
+    max_gb : float or None
+        Largest archive, uncompressed; None: no limit. [GB]
 
     Raises
     ------

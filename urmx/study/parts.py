@@ -50,7 +50,13 @@ class PartStore:
         self.folder, self.outputs = Path(folder), tuple(outputs)
 
     def started(self, now: str) -> str:
-        """The first run's start time, stamped now (`now`) when the folder has none."""
+        """The first run's start time, stamped now (`now`) when the folder has none.
+
+        Parameters
+        ----------
+        now : str
+            The time now (ISO 8601).
+        """
         stamp = self.folder / "started"
         if stamp.is_file():
             return stamp.read_text().strip()
@@ -71,13 +77,25 @@ class PartStore:
             return Definition(text, None)
 
     def claim(self, study: Definition) -> None:
-        """Say that the folder holds the parts of the study of definition `study`."""
+        """Say that the folder holds the parts of the study of definition `study`.
+
+        Parameters
+        ----------
+        study : urmx.study.definition.Definition
+            The study's definition.
+        """
         with writing(self.folder, "parts folder"):
             (self.folder / "study").write_text(study.to_json() + "\n", encoding="utf-8")
 
     def code(self, now: dict | None = None) -> dict | None:
         """The code (kernel, its source hash, urmx version) the folder's parts were last
-        computed by; with `now`, say that they are computed by `now` from here on."""
+        computed by; with `now`, say that they are computed by `now` from here on.
+
+        Parameters
+        ----------
+        now : dict, optional
+            This run's code (kernel, source hash, urmx version).
+        """
         stamp = self.folder / "code"
         try:
             before = json.loads(stamp.read_text(encoding="utf-8"))
@@ -91,7 +109,17 @@ class PartStore:
     def save(self, key: str, result: dict[str, np.ndarray], cells: np.ndarray) -> Path:
         """Save one batch's arrays and its cells' keys as ``<key>.npz`` (written under a
         temporary name and renamed); its key is stored inside too, so a copied or renamed
-        part is recognised."""
+        part is recognised.
+
+        Parameters
+        ----------
+        key : str
+            The batch's key.
+        result : dict of str to ndarray
+            The batch's output arrays.
+        cells : ndarray of uint64
+            Its cells' keys.
+        """
         # the temporary name does not end in .npz, so no glob for parts ever counts a part
         # still being written (a SIGINT then deletes it, and the count would go down)
         tmp = self.folder / f".{key}.{os.getpid()}.npz.tmp"
@@ -110,7 +138,13 @@ class PartStore:
     def load(self, key: str) -> dict[str, np.ndarray] | None:
         """The saved batch `key`, or None when there is none or it is damaged (truncated by
         a full disk or a kill mid-write), lacks one of the kind's `outputs` or its cells'
-        keys, or holds another batch (copied or renamed): such a batch is computed again."""
+        keys, or holds another batch (copied or renamed): such a batch is computed again.
+
+        Parameters
+        ----------
+        key : str
+            The batch's key.
+        """
         path = self.folder / f"{key}.npz"
         return load_part(path, key, self.outputs) if path.is_file() else None
 

@@ -51,7 +51,13 @@ class Progress:
             self._line()
 
     def note(self, message: str) -> None:
-        """A line of text above the bar (nothing when progress is off)."""
+        """A line of text above the bar (nothing when progress is off).
+
+        Parameters
+        ----------
+        message : str
+            The line.
+        """
         if not self.enabled:
             return
         if self.bar is not None:
@@ -71,6 +77,13 @@ class Progress:
         self.last_line = (10 * self.done // self.total, now)
 
     def update(self, n: int) -> None:
+        """Count `n` more units of work done (the bar, or a plain line every tenth of the work).
+
+        Parameters
+        ----------
+        n : int
+            Units done since the last update.
+        """
         self.done += n
         if not self.enabled:
             return
@@ -83,6 +96,7 @@ class Progress:
             self._line()
 
     def close(self) -> None:
+        """End the bar (nothing to end for plain lines or when progress is off)."""
         if self.bar is not None:
             self.bar.close()
             self.bar = None

@@ -27,6 +27,13 @@ def resolve_records(study, records_dir: str | os.PathLike | None = None) -> dict
     unless the study overrides them), the study file's own record files through
     `urmx.records.describe` (each read once, its SHA-256 computed in the same pass).
 
+    Parameters
+    ----------
+    study : urmx.catalog.Study
+        The study, as loaded from its file.
+    records_dir : str or path-like, optional
+        Records folder of the manifest ids (default :func:`urmx.config.records_dir`).
+
     Raises
     ------
     urmx.catalog.CatalogError

@@ -171,7 +171,13 @@ def _cell(value: Any) -> str:
 
 
 def format_info(found: dict[str, Any]) -> str:
-    """`info` as the text ``urmx info`` prints."""
+    """`info` as the text ``urmx info`` prints.
+
+    Parameters
+    ----------
+    found : dict
+        What :func:`info` returned.
+    """
     kind = f"{found['kind']} archive" if found["kind"] else "archive of no study"
     head = f"{found['path']}: {kind}"
     if found["study_name"]:
@@ -289,7 +295,7 @@ def diff(a: str | os.PathLike | xr.Dataset, b: str | os.PathLike | xr.Dataset,
     rtol : float
         Relative tolerance. [1]
     atol : float
-        Absolute tolerance, in each variable's units.
+        Absolute tolerance. [each variable's own units]
     listed : int
         Differing cells listed per variable (all are counted).
 
@@ -328,7 +334,13 @@ def _where(at: dict) -> str:
 
 
 def format_diff(found: dict[str, Any]) -> str:
-    """`diff` as the text ``urmx diff`` prints."""
+    """`diff` as the text ``urmx diff`` prints.
+
+    Parameters
+    ----------
+    found : dict
+        What :func:`diff` returned.
+    """
     lines = [f"A {found['a']}", f"B {found['b']}",
              f"tolerance: |A - B| <= {found['atol']:g} + {found['rtol']:g} * |B|"]
     for d in found["dimensions"]:

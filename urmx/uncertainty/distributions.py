@@ -211,6 +211,11 @@ def _number(key: str, value: Any) -> float:
 def parse_distribution(table: Any) -> Distribution:
     """A `Distribution` from its study-file table (module docstring).
 
+    Parameters
+    ----------
+    table : dict
+        The distribution's table of a study file (``{dist = "normal", mean = ..., std = ...}``).
+
     Raises
     ------
     ParameterError

@@ -171,7 +171,13 @@ KEYS = ("samples", "seed", "method", "parameters", "max_slenderness")
 def coordinate_name(parameter: str) -> str:
     """The name of a sampled parameter's coordinate in an archive: the parameter's, with
     ``_factor`` for a factor (``frequency_factor``: a wall's ``mass`` and a diaphragm's
-    ``frequency`` are coordinates of their own)."""
+    ``frequency`` are coordinates of their own).
+
+    Parameters
+    ----------
+    parameter : str
+        A sampled parameter's name (`PARAMETERS`).
+    """
     return f"{parameter}_factor" if PARAMETERS[parameter].factor else parameter
 
 
@@ -262,6 +268,7 @@ class Sampling:
             n = 2 * n if self.method == "sobol" else n + max(1, n // 16)
 
     def to_dict(self) -> dict[str, Any]:
+        """The settings as the ``[study.sampling]`` table they were read from."""
         out = {"samples": self.samples, "seed": self.seed, "method": self.method,
                "parameters": {k: d.to_dict() for k, d in self.parameters.items()}}
         if self.max_slenderness is not None:
@@ -271,7 +278,19 @@ class Sampling:
 
 def unit_design(n: int, d: int, method: str, seed: int) -> np.ndarray:
     """`n` points (``saltelli``: n (d + 2)) of the unit hypercube of dimension `d`, drawn
-    by `method` from `seed` (module docstring). [1]"""
+    by `method` from `seed` (module docstring). [1]
+
+    Parameters
+    ----------
+    n : int
+        Number of points (``saltelli``: base samples).
+    d : int
+        Dimension: the number of sampled parameters.
+    method : str
+        The design (`METHODS`).
+    seed : int
+        Seed of the design.
+    """
     if method == "saltelli":
         from SALib.sample import sobol as saltelli
 
@@ -291,6 +310,11 @@ def unit_design(n: int, d: int, method: str, seed: int) -> np.ndarray:
 
 def parse_sampling(table: Any) -> Sampling:
     """The `Sampling` settings of a ``[study.sampling]`` table (module docstring).
+
+    Parameters
+    ----------
+    table : dict
+        The ``[study.sampling]`` table of a study file.
 
     Raises
     ------
@@ -442,13 +466,29 @@ def _geometry(wall: Wall, values: dict[str, Any]) -> Wall:
 
 
 def sample_values(values: dict[str, np.ndarray], j: int) -> dict[str, Any]:
-    """Sample `j`'s value of each parameter (plain floats and strings)."""
+    """Sample `j`'s value of each parameter (plain floats and strings).
+
+    Parameters
+    ----------
+    values : dict of str to ndarray
+        Each parameter's values over the samples (its own units: ``cor`` [1], ``pmr`` [%],
+        a factor [1], ...).
+    j : int
+        The sample's index.
+    """
     return {k: (v[j] if isinstance(v[j], str) else float(v[j])) for k, v in values.items()}
 
 
 def check_samples(values: dict[str, np.ndarray], walls: dict[str, Wall]) -> None:
     """Refuse, before any work, a sample outside a parameter's valid range or whose wall
     is not valid on any of `walls` (label -> the study's wall of a cell).
+
+    Parameters
+    ----------
+    values : dict of str to ndarray
+        Each parameter's values over the samples (its own units).
+    walls : dict of str to urmx.Wall
+        The study's wall of each cell, by its label.
 
     Raises
     ------

@@ -77,6 +77,22 @@ def variance_shares(x, y, conf_level: float = CONF_LEVEL, resamples: int = RESAM
     the share of resamples in which it keeps its place in the ranking by share
     (``rank_held``). Runs with a NaN output are left out.
 
+    Parameters
+    ----------
+    x : array_like of float, shape (n, d)
+        The inputs' values of `n` runs (a ``choice`` input as its level's index). [each
+        input's own units]
+    y : array_like of float, shape (n,)
+        The output of each run. [the output's units]
+    conf_level : float
+        Confidence of the intervals. [1]
+    resamples : int
+        Bootstrap resamples of the runs.
+    seed : int
+        Seed of the bootstrap.
+    threshold : float
+        The R^2 below which the ranks' model is tried. [1]
+
     Returns
     -------
     dict
@@ -125,9 +141,10 @@ def prcc(x, y, conf_level: float = CONF_LEVEL) -> dict[str, np.ndarray]:
     Parameters
     ----------
     x : array_like, shape (n, d)
-        The inputs of `n` runs (or their points of the unit hypercube).
+        The inputs of `n` runs (or their points of the unit hypercube). [each input's own
+        units, or 1 in the unit hypercube]
     y : array_like, shape (n,)
-        The output of each run. Runs with a NaN output are left out.
+        The output of each run. Runs with a NaN output are left out. [the output's units]
     conf_level : float
         Confidence of the intervals. [1]
 
@@ -184,10 +201,10 @@ def sobol_indices(unit, y, method: str, seed: int = 0, conf_level: float = CONF_
     Parameters
     ----------
     unit : array_like, shape (n, d)
-        The design's points of the unit hypercube (`urmx.uncertainty.Sampling.unit`), in
+        The design's points of the unit hypercube (`urmx.uncertainty.Sampling.unit`) [1], in
         its order.
     y : array_like, shape (n,)
-        The output of each point.
+        The output of each point. [the output's units]
     method : str
         The design's method: ``saltelli`` gives ``S1`` and ``ST`` by Saltelli's
         estimators; any other ``S1`` by RBD-FAST and ``ST`` NaN.
@@ -244,6 +261,11 @@ def variance_split(table) -> dict[str, float]:
     variance components ``model = (MS_S - MS_E) / R``, ``record = (MS_R - MS_E) / S`` and
     ``interaction = MS_E`` without bias; a negative estimate is set to 0. Samples or
     records with a NaN cell are left out.
+
+    Parameters
+    ----------
+    table : array_like of float, shape (samples, records)
+        One result per cell (e.g. log collapse capacities). [the results' units]
 
     Returns
     -------

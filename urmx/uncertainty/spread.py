@@ -60,7 +60,7 @@ def modelling_fit(capacities, censored=None) -> dict[str, np.ndarray | float]:
     ----------
     capacities : array_like, shape (samples, records)
         Collapse intensities (NaN where not run). [units of the intensity]
-    censored : array_like, shape (samples, records), optional
+    censored : array_like of bool, shape (samples, records), optional
         1 (or True) where the capacity is censored.
 
     Returns

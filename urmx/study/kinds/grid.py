@@ -89,7 +89,16 @@ def rest_time(task: dict[str, Any]) -> dict[str, float]:
 def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.ndarray]:
     """Run one block through the kernel: a numpy array of the block's shape per output,
     and ``extra.<i>.<name>`` arrays of the kept time histories (``i`` the cell's flat index
-    in the block). Numpy only."""
+    in the block). Numpy only.
+
+    Parameters
+    ----------
+    task : dict
+        The block: its walls' parameters, the dimensions' values, the kept histories, the
+        settings (what the grid kind's task maker writes).
+    acceleration : ndarray of float
+        The block's record samples, unscaled. [m s-2]
+    """
     kernel = task["kernel"]
     if kernel is None:
         from ...kernel import run as kernel

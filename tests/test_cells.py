@@ -651,6 +651,16 @@ def test_cell_keys_follow_what_decides_a_result(grid, make_study, monkeypatch):
     monkeypatch.setattr(urmx.jitcache, "SOURCE_HASH", "0" * 16)
     assert not np.isin(Cells(study, kinds.get("grid"), records).keys(every), keys).any()
     monkeypatch.undo()
+    # versions come from git tags: the commits after a release keep its cells (the kernel's
+    # source hash above guards the results), the next release computes them again
+    for version, same in (("0.2.0.post3+g1234567", True), ("0.2.0.post9+gabcdef0.dirty", True),
+                          ("0.2.0+unknown", True), ("0.3.0", False)):
+        monkeypatch.setattr(urmx, "__version__", version)
+        base = Cells(study, kinds.get("grid"), records).keys(every)
+        monkeypatch.setattr(urmx, "__version__", "0.2.0")
+        assert np.array_equal(base, Cells(study, kinds.get("grid"), records).keys(every)) \
+            == same, version
+    monkeypatch.undo()
     changed = dict(records)
     rec = records["shake"]
     changed["shake"] = type(rec)("shake", rec.acceleration * 1.001, rec.dt, rec.scale_factor)

@@ -95,6 +95,17 @@ def git_release() -> str | None:
     return release if distance == 0 else f"{release}.post{distance}"
 
 
+def release(version: str | None = None) -> str:
+    """The release part of a version (``0.2.0`` of ``0.2.0.post3+g7ab99c0``; default the
+    installed ``urmx.__version__``): what a study's cell keys hold, so cells computed at
+    one commit are reused at the next one of the same release (the kernel's own source
+    hash is in the keys besides, so a changed kernel never reuses them)."""
+    if version is None:
+        from . import __version__ as version
+    found = re.match(r"\d+(\.\d+)*", version)
+    return found.group(0) if found else version
+
+
 def code_version() -> str:
     """The code that runs: in a git checkout, the release of the nearest tag
     (:func:`git_release`; without a tag, the installed version's public part) with the

@@ -112,7 +112,8 @@ class Cells:
     """
 
     def __init__(self, study: Any, kind: Any, records: dict, kernel: Callable | None = None):
-        from .. import __version__, jitcache
+        from .. import jitcache
+        from ..provenance import release
         from .parts import kernel_name
 
         self.study, self.kind = study, kind
@@ -127,7 +128,7 @@ class Cells:
             for n, v in self.dims.items()]
         base = {"kind": kind.name, "settings": _plain(study.settings), "tail": study.tail,
                 "impact": None if "impact" in self.dims else study.impact,
-                "dims": self.names, "kernel": kernel_name(kernel), "urmx": __version__,
+                "dims": self.names, "kernel": kernel_name(kernel), "urmx": release(),
                 "kernel_source": jitcache.SOURCE_HASH}
         if study.t_rest != T_REST:  # (the default left out: keys made before it stay)
             base["t_rest"] = study.t_rest

@@ -340,7 +340,7 @@ def test_compare_on_a_synthetic_archive():
 
 
 def test_assessment_report_on_a_synthetic_archive(tmp_path):
-    from urmx.assessment_report import write_report
+    from urmx.reports.assessment import write_report
 
     walls = {("w1", "D1"): building_wall(0.23), ("w1", "D1/both"): building_wall(0.23, "both"),
              ("w2", "D1"): building_wall(0.35), ("w2", "D1/both"): building_wall(0.35, "both")}

@@ -1,5 +1,5 @@
 """The shape of the package: no module reaches into another's private names, library code
-leaves the plotting backend alone, and the README's layout names every module (those of the
+leaves the plotting backend alone, and docs/layout.md names every module (those of the
 subpackages too) and the one place study kinds are registered."""
 
 from __future__ import annotations
@@ -95,16 +95,15 @@ def test_library_code_leaves_the_plotting_backend_alone():
                 assert ast.unparse(node.value) != "matplotlib", f"{path}: matplotlib.use"
 
 
-def test_readme_layout_names_every_module_and_folder():
-    text = (project_root() / "README.md").read_text(encoding="utf-8")
-    layout = text.split("## Layout", 1)[1].split("\n## ", 1)[0]
+def test_the_layout_page_names_every_module_and_folder():
+    layout = (project_root() / "docs" / "layout.md").read_text(encoding="utf-8")
     names = {p.stem for p in PACKAGE.rglob("*.py") if p.stem != "__init__"}
     names |= {p.name for p in PACKAGE.rglob("*") if (p / "__init__.py").is_file()}
     missing = {n for n in names if not re.search(rf"\b{n}\b", layout)}
-    assert not missing, f"README Layout lacks {sorted(missing)}"
+    assert not missing, f"docs/layout.md lacks {sorted(missing)}"
     assert "kinds/__init__.py is the one place kinds are registered" in " ".join(
         layout.split())
     folders = {p.name for p in project_root().iterdir()
                if p.is_dir() and not p.name.startswith(".") and p.name not in
                ("results", "build", "dist", "scratch") and not p.name.endswith(".egg-info")}
-    assert not {f for f in folders if f"{f}/" not in layout}, "README Layout lacks a folder"
+    assert not {f for f in folders if f"{f}/" not in layout}, "docs/layout.md lacks a folder"

@@ -3,7 +3,7 @@
 import numpy as np
 
 from urmx.cli import main
-from urmx.report import study_kind, write_report
+from urmx.reports.paper import study_kind, write_report
 
 from .fixtures import paper_studies as F
 from .fixtures.studies import multi_storey, single_storey
@@ -46,7 +46,7 @@ def test_figures_in_paper_order_and_units(tmp_path):
     from urmx import analysis as A
     from urmx import plot as P
     from urmx.paper import load_paper
-    from urmx.report import _paper_order, _record_titles
+    from urmx.reports.paper import _paper_order, _record_titles
 
     ds = F.single()
     assert _paper_order(ds, load_paper()) == ["nahanni", "christchurch", "elcentro"]
@@ -106,3 +106,25 @@ def test_cli_report(tmp_path, capsys):
 def test_cli_missing_file_is_one_line_error(tmp_path, capsys):
     assert main(["report", str(tmp_path / "nope.nc"), "--out", str(tmp_path)]) == 2
     assert "no study archive" in capsys.readouterr().err
+
+
+def test_old_module_names_are_the_moved_modules():
+    """Each old module name of `urmx.MOVED` imports the module that replaced it (the same
+    object, its own __spec__ kept), and ``python -m`` of an old name runs the new module."""
+    import importlib
+    import subprocess
+    import sys
+
+    import urmx
+
+    assert len(urmx.MOVED) == 9
+    for old, new in urmx.MOVED.items():
+        module = importlib.import_module(old)
+        assert module is importlib.import_module(new) and module.__spec__.name == new
+    from urmx.fragility_report import write_report as old_writer
+
+    from urmx.reports import REPORTS
+    assert old_writer is REPORTS["ida"] and urmx.reporting is urmx.reports.common
+    done = subprocess.run([sys.executable, "-m", "urmx.predictors_report", "--help"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and "--replicates" in done.stdout

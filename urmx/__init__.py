@@ -8,6 +8,10 @@ Every error urmx raises for bad input or a run it cannot accept is a `urmx.UrmxE
 (module `urmx.errors`), with a one-line message naming the bad value.
 """
 
+import importlib
+import importlib.abc
+import importlib.util
+import sys
 from importlib.metadata import PackageNotFoundError, version
 
 from .config import UrmxWarning
@@ -29,18 +33,53 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_analysis",
-               "fragility_report", "generic_report", "guard", "kernel", "markdown", "model",
-               "netcdf", "paper", "plot", "records", "reference", "report", "reporting",
-               "simulation", "study", "variables")
+_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_analysis", "guard",
+               "kernel", "markdown", "model", "netcdf", "paper", "plot", "records",
+               "reference", "reports", "simulation", "study", "variables")
+
+#: old module -> the module that replaced it: ``import urmx.fragility_report`` (and ``python
+#: -m`` of an old name) gives the new module, for one release (docs/layout.md)
+MOVED = {
+    "urmx.report": "urmx.reports.paper",
+    "urmx.reporting": "urmx.reports.common",
+    "urmx.generic_report": "urmx.reports.grid",
+    "urmx.fragility_report": "urmx.reports.ida",
+    "urmx.risk_report": "urmx.reports.ida_risk",
+    "urmx.uncertainty_report": "urmx.reports.sampling",
+    "urmx.assessment_report": "urmx.reports.assessment",
+    "urmx.predictors_report": "urmx.reports.predictors",
+    "urmx.records.report": "urmx.reports.records",
+}
+
+
+class _Moved(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Finds the old names of :data:`MOVED`: the module object is the new module's own (one
+    module, whichever name imported it), its ``__spec__`` left the new one's."""
+
+    def find_spec(self, name, path=None, target=None):
+        return importlib.util.spec_from_loader(name, self) if name in MOVED else None
+
+    def create_module(self, spec):
+        module = importlib.import_module(MOVED[spec.name])
+        spec.loader_state = module.__spec__  # the import machinery sets ours on it
+        return module
+
+    def exec_module(self, module):
+        module.__spec__ = module.__spec__.loader_state
+
+    def get_code(self, name):  # ``python -m urmx.<old name>`` runs the new module
+        return compile(f"import runpy\nrunpy.run_module({MOVED[name]!r}, run_name='__main__',"
+                       " alter_sys=True)\n", f"<{name}: moved to {MOVED[name]}>", "exec")
+
+
+if not any(isinstance(f, _Moved) for f in sys.meta_path):
+    sys.meta_path.insert(0, _Moved())
 
 
 def __getattr__(name):
-    import importlib
-
     if name in _LAZY:
         module, attr = _LAZY[name]
         return getattr(importlib.import_module(module), attr)
-    if name in _SUBMODULES:
+    if name in _SUBMODULES or f"urmx.{name}" in MOVED:
         return importlib.import_module(f"urmx.{name}")
     raise AttributeError(f"module 'urmx' has no attribute {name!r}")

@@ -22,8 +22,8 @@ import sys
 import threading
 from pathlib import Path
 
-COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility",
-            "risk", "uncertainty", "assess", "export", "show", "catalog")
+COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "risk", "assess",
+            "export", "show", "catalog", "aliases")
 
 
 class _Version(argparse.Action):

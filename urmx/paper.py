@@ -23,7 +23,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 from typing import Any
 
@@ -32,9 +32,12 @@ import xarray as xr
 
 from . import analysis as A
 from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
+from .config import records_dir
 from .errors import MissingFileError
 from .markdown import table
 from .model import PAPER_G, RIGID
+from .study.clients import close_client, get_client, stop_now
+from .study.engine import run_study
 from .variables import attrs as registry_attrs
 
 if sys.version_info >= (3, 11):
@@ -64,6 +67,55 @@ FAMILY1 = (11, 12)  # the unfavourable patterns
 #: reads their archives)
 STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
            "verification-intensity")
+
+
+def run_paper(out: str | os.PathLike = "results", scheduler: Any = None,
+              wrap: Callable[[Path, Callable[[], Any]], Any] | None = None,
+              say: Callable[[str], Any] | None = None, **options: Any) -> list[Path]:
+    """Run the paper's studies (:data:`STUDIES`) into ``<out>/<study>.nc`` on one cluster
+    (``urmx paper``); returns the archives' paths, which `urmx.reports.paper.write_report`
+    makes the paper's report of.
+
+    Parameters
+    ----------
+    out : path
+        Folder of the archives (created if needed); a study whose archive is complete is
+        not run again (`urmx.run_study` resumes).
+    scheduler : optional
+        As for `urmx.run_study`; one client serves all four studies (``"serial"``: none).
+    wrap : callable, optional
+        ``wrap(path, run)`` calls ``run()``, the run of the study writing `path` (the
+        command line says there what an interrupted run keeps); default: ``run()``.
+    say : callable, optional
+        Told the study about to run (``name -> path``).
+    **options
+        Any other keyword of `urmx.run_study` (progress, batch_size, records_dir, command,
+        force, max_cells, max_gb).
+    """
+    out = Path(out)
+    records_dir(options.get("records_dir"))  # a missing folder is said before a cluster
+    client, owned = (None, False)
+    if scheduler != "serial":
+        client, owned = get_client(scheduler)
+    archives = []
+    try:
+        for name in STUDIES:
+            path = out / f"{name}.nc"
+            if say is not None:
+                say(f"{name} -> {path}")
+            run = partial(run_study, name, out=path,
+                          scheduler=client if client else "serial", **options)
+            (wrap or (lambda _, run: run()))(path, run)
+            archives.append(path)
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
+        if owned:
+            owned = False
+            stop_now(client)
+        raise
+    finally:
+        if owned:
+            close_client(client)
+    return archives
 
 
 # ---- the paper's numbers ----------------------------------------------------------------------

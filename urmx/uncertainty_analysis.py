@@ -18,7 +18,7 @@ import xarray as xr
 
 from . import fragility_analysis as FA
 from .errors import InputError
-from .reporting import open_archive
+from .study.archive import open_archive
 from .uncertainty import (
     R2_THRESHOLD,
     coordinate_name,

@@ -5,7 +5,7 @@ the cluster's start, the run, the workers' CPU time and the load).
 
 Not part of ``all`` (minutes on 2 cores); ask for it by name: ``urmx bench wall_population``
 (``--quick``: 32 walls x 4 records). The full run writes ``results/wall-population.nc``,
-from which ``python -m urmx.predictors_report results/wall-population.nc`` writes
+from which ``python -m urmx.reports.predictors results/wall-population.nc`` writes
 ``reports/predictors/``. A run made with ``urmx run`` instead is recorded with
 :func:`record` from its archive and the CPU time ``/usr/bin/time`` measured.
 """

@@ -49,8 +49,8 @@ def _risk(args) -> int:
 
     from ..errors import InputError
     from ..fragility_analysis import first_cor
-    from ..fragility_report import open_ida
-    from ..risk_report import risk_lines, risk_numbers
+    from ..reports.ida import open_ida
+    from ..reports.ida_risk import risk_lines, risk_numbers
 
     if args.archive is None:
         return _one_fragility(args)

@@ -22,6 +22,7 @@ import xarray as xr
 from ..errors import InputError
 from ..markdown import number
 from . import kinds
+from .archive import open_archive
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -36,8 +37,6 @@ ROWS = 60
 
 def _open(archive: Any) -> tuple[xr.Dataset, str]:
     """(the loaded Dataset, its name) of a path or a Dataset."""
-    from ..reporting import open_archive
-
     if isinstance(archive, xr.Dataset):
         return archive, "(Dataset)"
     if not isinstance(archive, (str, os.PathLike)):

@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import InputError
+from .archive import open_archive
 
 #: dimensions of what a cell keeps beside its scalars (not rows of the table)
 PER_CELL = ("history", "time")
@@ -133,7 +134,6 @@ def to_dataframe(archive: str | os.PathLike | xr.Dataset, where: Any = None):
     import pandas as pd
 
     from ..errors import path_argument
-    from ..reporting import open_archive
 
     if not isinstance(archive, xr.Dataset):
         path_argument("to_dataframe", "archive", archive)

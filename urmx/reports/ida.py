@@ -41,15 +41,15 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import fragility_analysis as FA
-from . import plot as P
-from .errors import InputError
-from .fragility_analysis import GROUPS, STIFFEN
-from .markdown import number as _fmt
-from .markdown import table
-from .plot import plot_capacity_resonance as plot_resonance
-from .plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
-from .reporting import (
+from .. import fragility_analysis as FA
+from .. import plot as P
+from ..errors import InputError
+from ..fragility_analysis import GROUPS, STIFFEN
+from ..markdown import number as _fmt
+from ..markdown import table
+from ..plot import plot_capacity_resonance as plot_resonance
+from ..plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
+from .common import (
     DEGENERATE,
     DEGENERATE_NOTE,
     enough_records,
@@ -61,7 +61,7 @@ from .reporting import (
     save_figure,
     too_few,
 )
-from .risk_report import (
+from .ida_risk import (
     comparison_findings,
     im_comparison,
     measure_findings,
@@ -80,7 +80,7 @@ YEARS = 50.0
 
 def default_site() -> tuple[Path, Path]:
     """The illustrative hazard curve and design spectrum of ``catalog/hazard/``."""
-    from .catalog import catalog_dir
+    from ..catalog import catalog_dir
 
     return catalog_dir() / "hazard" / HAZARD, catalog_dir() / "hazard" / SPECTRUM
 
@@ -235,7 +235,7 @@ def _medians(ds: xr.Dataset, d: xr.Dataset, groups=None) -> list[str]:
         lines += [f"No intervals: {too_few(n, 'an interval')}; the medians and "
                   "dispersions below are estimates from these records alone.", ""]
     if ci:
-        from .fragility.fits import RESAMPLES, SEED
+        from ..fragility.fits import RESAMPLES, SEED
 
         lines += [f"In brackets: the {level} studentized bootstrap interval (Efron & "
                   "Tibshirani 1993, Section 12.5: each resample standardised by its own "

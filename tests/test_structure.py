@@ -212,3 +212,25 @@ def test_every_module_says_its_job_first():
         if not doc or not re.match(r"^[`A-Z\w(].*", doc) or "." not in doc:
             missing.append(name)
     assert missing == []
+
+
+def test_the_engine_imports_no_kernel_and_the_kernel_keeps_the_status_codes():
+    """The study's modules outside its kinds never import the kernel (a kind brings its
+    warm-up and its integrator's record time-step floor); the status vocabulary is the
+    study's (`urmx.study.dataset.STATUS`) and the kernel's codes are its first three."""
+    from urmx import kernel
+    from urmx.study import dataset, kinds
+
+    graph = import_graph(PACKAGE)
+    engine = [n for n in graph if n.startswith("urmx.study") and ".kinds" not in n]
+    assert len(engine) > 10 and "urmx.study.engine" in engine
+    assert {n: sorted(graph[n] & {"urmx.kernel"}) for n in engine
+            if "urmx.kernel" in graph[n]} == {}
+    assert "urmx.kernel" in graph["urmx.study.kinds.grid"]  # the check sees the kinds' import
+    codes = {"ok": kernel.ST_OK, "collapsed": kernel.ST_COLLAPSED,
+             "event-limit": kernel.ST_EVENT_LIMIT}
+    assert {name: dataset.STATUS.index(name) for name in codes} == codes
+    assert kernel.STATUS == dataset.STATUS[:3] and dataset.STATUS[dataset.NOT_RUN] == "not-run"
+    assert kernel.ST_NEED_PIECE not in codes.values() and kernel.ST_NEED_PIECE == 3  # internal
+    for kind in kinds.BUILT_IN:
+        assert kind.warm_up is kernel.warm_up and kind.dt_above == kernel.WINDOW

@@ -34,9 +34,10 @@ from . import analysis as A
 from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
 from .config import records_dir
 from .errors import MissingFileError
+from .kernel import warm_up
 from .markdown import table
 from .model import PAPER_G, RIGID
-from .study.clients import close_client, get_client, stop_now
+from .study.clients import shared_client
 from .study.engine import run_study
 from .variables import attrs as registry_attrs
 
@@ -94,11 +95,8 @@ def run_paper(out: str | os.PathLike = "results", scheduler: Any = None,
     """
     out = Path(out)
     records_dir(options.get("records_dir"))  # a missing folder is said before a cluster
-    client, owned = (None, False)
-    if scheduler != "serial":
-        client, owned = get_client(scheduler)
     archives = []
-    try:
+    with shared_client(scheduler, warm_up) as client:
         for name in STUDIES:
             path = out / f"{name}.nc"
             if say is not None:
@@ -107,14 +105,6 @@ def run_paper(out: str | os.PathLike = "results", scheduler: Any = None,
                           scheduler=client if client else "serial", **options)
             (wrap or (lambda _, run: run()))(path, run)
             archives.append(path)
-    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
-        if owned:
-            owned = False
-            stop_now(client)
-        raise
-    finally:
-        if owned:
-            close_client(client)
     return archives
 
 

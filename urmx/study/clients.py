@@ -107,17 +107,21 @@ def refuse_in_worker_import() -> None:
                          f"script: {UNGUARDED}")
 
 
-def local_client(n_workers: int | None = None, threads: bool = False):
+def local_client(n_workers: int | None = None, threads: bool = False,
+                 warm_up: Callable[[], None] | None = None):
     """A ``distributed.Client`` on a new local cluster.
 
     Parameters
     ----------
     n_workers : int, optional
         Worker processes of one thread each (default: one per core). The kernel holds
-        the GIL, so processes beat threads; the kernel is compiled (or loaded from the
-        cache) here first, so the workers load its native code from the cache.
+        the GIL, so processes beat threads.
     threads : bool
         One worker in this process with `n_workers` threads instead.
+    warm_up : callable, optional
+        Called before the worker processes start: a study kind's ``warm_up`` compiles its
+        integrator (or loads it from the cache) here first, so the workers load its native
+        code from the cache.
 
     Returns
     -------
@@ -127,10 +131,8 @@ def local_client(n_workers: int | None = None, threads: bool = False):
     from distributed import Client, LocalCluster
 
     n = n_workers or os.cpu_count() or 1
-    if not threads:
-        from ..kernel import warm_up
-
-        warm_up()
+    if not threads and warm_up is not None:
+        warm_up()  # compiled once here: the worker processes load it from the cache
     # Ctrl-C in a terminal reaches the whole process group. SIGINT is blocked while the
     # cluster starts: the worker processes (and those restarted later, spawned from the
     # cluster's thread) inherit the blocked signal, so only this process handles it; a
@@ -190,7 +192,26 @@ def _usable(client: Any) -> Any:
     return client
 
 
-def get_client(scheduler: Any) -> tuple[Any, bool]:
+@contextlib.contextmanager
+def shared_client(scheduler: Any, warm_up: Callable[[], None] | None = None):
+    """One client for several runs (None for ``"serial"``; else :func:`get_client`): one
+    it started is stopped within bounds on Ctrl-C or SIGTERM (:func:`stop_now`), else
+    closed when the runs end."""
+    client, owned = get_client(scheduler, warm_up) if scheduler != "serial" else (None, False)
+    try:
+        yield client
+    except KeyboardInterrupt:
+        if owned:
+            owned = False
+            stop_now(client)
+        raise
+    finally:
+        if owned:
+            close_client(client)
+
+
+def get_client(scheduler: Any, warm_up: Callable[[], None] | None = None
+               ) -> tuple[Any, bool]:
     """(client, owned) for a `scheduler` argument of `urmx.run_study`: a Client is used as
     it is, and so is the active client for None (owned False); None (without an active
     client) or "processes" start local worker processes, "threads" a threaded local
@@ -215,7 +236,7 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
                              "distributed.Client")
         return _usable(scheduler), False
     if scheduler in (None, "processes", "threads"):
-        return local_client(threads=scheduler == "threads"), True
+        return local_client(threads=scheduler == "threads", warm_up=warm_up), True
     previous = logging.root.manager.disable
     logging.disable(logging.CRITICAL)  # a refused connection is said once, below
     try:

@@ -15,14 +15,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import variables
-from ..kernel import STATUS as _KERNEL_STATUS
 
 if TYPE_CHECKING:
     import xarray as xr
 
-#: an analysis' status, as the kernel reports it, and a cell no analysis ran for; the flag
-#: values 0, 1, 2, 3 of a grid's ``status`` variable
-STATUS = (*_KERNEL_STATUS, "not-run")
+#: an analysis' status (ok, collapsed, event-limit: the codes 0, 1, 2 the kernel reports,
+#: `urmx.kernel.STATUS`, held to these by tests/test_structure.py) and a cell no analysis ran
+#: for; the flag values 0, 1, 2, 3 of a grid's ``status`` variable
+STATUS = ("ok", "collapsed", "event-limit", "not-run")
 NOT_RUN = STATUS.index("not-run")
 VALID = (STATUS.index("ok"), STATUS.index("collapsed"))  # statuses whose outputs are kept
 MISSING = ("NaN where the cell was not run or its status is not ok/collapsed (event-limit: "

@@ -184,9 +184,11 @@ def batch_tasks(study: Study, records: dict, batch_size: int = 16,
 
 def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
             scheduler: Any, on_result: Callable[[Batch, dict], None],
-            runner: Callable[[dict, np.ndarray], dict]) -> None:
-    """Run the batches (each through `runner`, a kind's ``run``) and hand each result to
-    `on_result` as it arrives.
+            runner: Callable[[dict, np.ndarray], dict],
+            warm_up: Callable[[], None] | None = None) -> None:
+    """Run the batches (each through `runner`, a kind's ``run``; `warm_up`, its kind's,
+    loads the integrator before a batch is timed or a cluster starts) and hand each result
+    to `on_result` as it arrives.
 
     ``scheduler=None`` uses the ``distributed.Client`` already active in this process when
     there is one; else a study small enough runs in this process (:func:`_in_process`),
@@ -201,22 +203,23 @@ def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
     scheduler, the workers and this process hold few of them at once.
     """
     _compute_all(iter(tasks), sum(b.size for b, _ in tasks), records, rec_ids, scheduler,
-                 on_result, runner)
+                 on_result, runner, warm_up)
 
 
 def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str],
-                 scheduler: Any, on_result: Callable, runner: Callable) -> None:
+                 scheduler: Any, on_result: Callable, runner: Callable,
+                 warm_up: Callable[[], None] | None = None) -> None:
     """:func:`compute` over batches made as they are needed (`total`: their cells)."""
     check_scheduler(scheduler)
     if scheduler == "serial":
         _here(batches, records, rec_ids, on_result, runner)
         return
     if scheduler is None and active_client() is None:
-        batches = _in_process(batches, total, records, rec_ids, on_result, runner)
+        batches = _in_process(batches, total, records, rec_ids, on_result, runner, warm_up)
     first = list(itertools.islice(batches, 1))
     if not first:
         return
-    client, owned = _client(scheduler)
+    client, owned = _client(scheduler, warm_up)
     with quiet_client():
         try:
             watch = Watch(client, worker_timeout())
@@ -254,7 +257,8 @@ def serial_estimate(seconds: float, size: int, total: int) -> float:
 
 
 def _in_process(tasks: Iterator, total: int, records: dict, rec_ids: list[str],
-                on_result: Callable, runner: Callable) -> Iterator:
+                on_result: Callable, runner: Callable,
+                warm_up: Callable[[], None] | None = None) -> Iterator:
     """Run a small study in this process and return the batches left for a cluster.
 
     The rule: a study of one batch runs here. Otherwise the kernel is loaded and the
@@ -266,9 +270,8 @@ def _in_process(tasks: Iterator, total: int, records: dict, rec_ids: list[str],
     first = list(itertools.islice(tasks, 2))
     if len(first) <= 1:
         return _here(first, records, rec_ids, on_result, runner)
-    from ..kernel import warm_up
-
-    warm_up()  # loading (or compiling) the kernel is not the study's cost
+    if warm_up is not None:
+        warm_up()  # loading (or compiling) the integrator is not the study's cost
     start = time.perf_counter()
     _here(first[:1], records, rec_ids, on_result, runner)
     estimate = serial_estimate(time.perf_counter() - start, first[0][0].size, total)
@@ -389,7 +392,7 @@ def _window(client: Any, first: list) -> int:
     return max(32 * workers, 64, min(WINDOW, WINDOW_CELLS // per))
 
 
-def _client(scheduler: Any) -> tuple[Any, bool]:
+def _client(scheduler: Any, warm_up: Callable[[], None] | None = None) -> tuple[Any, bool]:
     """`get_client`, a cluster it starts keeping short logs of the messages it sent
     (distributed keeps the last 1000 batches of messages of every connection, the batches'
     tasks with them: hundreds of MB in the main process over a long study)."""
@@ -397,7 +400,7 @@ def _client(scheduler: Any) -> tuple[Any, bool]:
     import distributed  # noqa: F401 - its config defaults first, kept when the set ends
 
     with dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG}):
-        return get_client(scheduler)
+        return get_client(scheduler, warm_up)
 
 
 def _saver(cells: Cells, sources: Sources, bar: Progress, stats: RunStats) -> Callable:
@@ -480,7 +483,8 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     batches = (_made(cells, b, records, kernel) for b in cut)
     try:
         _compute_all(batches, stats.runs - stats.from_parts - stats.from_archive, records,
-                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run)
+                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run,
+                     kind.warm_up)
     except RunError as exc:
         kept = store.count() if store is not None else 0
         if not kept:

@@ -17,6 +17,7 @@ from pathlib import Path
 from ..config import data_dir
 from ..errors import MissingFileError, UrmxError
 from ..records.record import Record
+from . import kinds
 
 #: the record type of a study (one type for every path: `urmx.records.Record`)
 RecordData = Record
@@ -81,11 +82,10 @@ def _own(study, o, in_manifest: bool) -> Record:
                           allow_unusual=o.allow_unusual)
     except UrmxError as exc:  # a RecordError, a missing file: with the study's table
         raise study.error(key, f"{o.file}: {exc}", key) from None
-    from ..kernel import WINDOW
-
-    if not rf.dt > WINDOW:  # only with allow_unusual: the kernel would refuse it later
+    window = kinds.get(study.kind).dt_above  # the kernel's merged-impact window
+    if not rf.dt > window:  # only with allow_unusual: the kernel would refuse it later
         raise study.error(key, f"{o.file}: time step dt={rf.dt:g} s is not above the "
-                          f"kernel's merged-impact window ({WINDOW:g} s)", key)
+                          f"kernel's merged-impact window ({window:g} s)", key)
     if o.sha256 and rf.sha256 != o.sha256:
         raise study.error(f"{key}.sha256", f"{o.file} has SHA-256 {rf.sha256[:12]}..., not "
                           f"the {o.sha256[:12]}... the study pins: the file changed", key,

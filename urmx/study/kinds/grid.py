@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import variables
+from ...kernel import WINDOW, warm_up
+from ...kernel import run as run_kernel
 from ...model import T_REST
 from ...netcdf import INT_FILL  # the integer outputs' _FillValue on disk
 from ..batches import Batch
@@ -90,9 +92,7 @@ def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.nd
     """Run one block through the kernel: a numpy array of the block's shape per output,
     and ``extra.<i>.<name>`` arrays of the kept time histories (``i`` the cell's flat index
     in the block). Numpy only."""
-    kernel = task["kernel"]
-    if kernel is None:
-        from ...kernel import run as kernel
+    kernel = task["kernel"] or run_kernel
     walls = task["walls"]
     shape = (len(walls), len(walls[0]), len(task["cor"]), len(task["scale"]),
              len(task["impact"]), len(walls[0][0]))
@@ -272,4 +272,5 @@ def cell_bytes(study: Any) -> float:
 
 KIND = Kind(name="grid", unit="analyses", outputs=BATCH_OUTPUTS, task=task, run=run_batch,
             assemble=assemble, reopen=reopen, extras=extras,
-            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes, counts=counts)
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes, counts=counts,
+            warm_up=warm_up, dt_above=WINDOW)

@@ -471,11 +471,13 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 KIND = Kind(name="sampling", table="sampling", unit="analyses", outputs=grid.BATCH_OUTPUTS,
             parse=parse, dims=dims, identity=identity, task=task, run=run_batch,
             assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
-            fills={"status": (NOT_RUN, "int8")}, cell_bytes=grid.cell_bytes)
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=grid.cell_bytes,
+            warm_up=grid.KIND.warm_up, dt_above=grid.KIND.dt_above)
 #: collapse capacities of every sample (``[study.ida]`` beside ``[study.sampling]``): the
 #: IDA kind's outputs per cell
 KIND_IDA = Kind(name="sampling-ida", table="sampling", combines=("ida",), unit="cells",
                 outputs=ida.OUTPUTS, parse=parse, dims=dims, identity=identity, task=task,
                 run=run_batch, assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
                 archived={**ida.ARCHIVED, "unit": "record_intensity"},
-                cell_bytes=ida.cell_bytes)
+                cell_bytes=ida.cell_bytes, warm_up=ida.KIND.warm_up,
+                dt_above=ida.KIND.dt_above)

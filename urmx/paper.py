@@ -37,7 +37,7 @@ from .errors import MissingFileError
 from .kernel import warm_up
 from .markdown import table
 from .model import PAPER_G, RIGID
-from .study.clients import shared_client
+from .study.clients import get_client, owning
 from .study.engine import run_study
 from .variables import attrs as registry_attrs
 
@@ -96,7 +96,8 @@ def run_paper(out: str | os.PathLike = "results", scheduler: Any = None,
     out = Path(out)
     records_dir(options.get("records_dir"))  # a missing folder is said before a cluster
     archives = []
-    with shared_client(scheduler, warm_up) as client:
+    client = get_client(scheduler, warm_up) if scheduler != "serial" else (None, False)
+    with owning(*client) as client:
         for name in STUDIES:
             path = out / f"{name}.nc"
             if say is not None:

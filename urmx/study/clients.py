@@ -193,11 +193,10 @@ def _usable(client: Any) -> Any:
 
 
 @contextlib.contextmanager
-def shared_client(scheduler: Any, warm_up: Callable[[], None] | None = None):
-    """One client for several runs (None for ``"serial"``; else :func:`get_client`): one
-    it started is stopped within bounds on Ctrl-C or SIGTERM (:func:`stop_now`), else
-    closed when the runs end."""
-    client, owned = get_client(scheduler, warm_up) if scheduler != "serial" else (None, False)
+def owning(client: Any, owned: bool):
+    """Hold `client` (as :func:`get_client` gives it) for a run or several: one urmx
+    started (`owned`) is stopped within bounds on Ctrl-C or SIGTERM (:func:`stop_now`),
+    else closed when the runs end; any other is left as it is."""
     try:
         yield client
     except KeyboardInterrupt:

@@ -90,13 +90,13 @@ from .clients import (
     fetch_all,
     get_client,
     mismatch,
+    owning,
     quiet_client,
     record_samples,
     refuse_in_worker_import,
     release,
     run_stamped,
     setting,
-    stop_now,
     worker_timeout,
 )
 from .dataset import global_attrs
@@ -220,26 +220,17 @@ def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str
     if not first:
         return
     client, owned = _client(scheduler, warm_up)
-    with quiet_client():
-        try:
-            watch = Watch(client, worker_timeout())
-            check_workers(client, watch.timeout)
-            for chunk in _windows(itertools.chain(first, batches), _window(client, first)):
-                pending: dict = {}
-                try:
-                    _submit(client, chunk, records, rec_ids, runner, pending)
-                    _gather(pending, on_result, watch)
-                finally:
-                    if pending and not owned:
-                        release(client, False, [f for f, _ in pending.values()])
-        except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
-            if owned:
-                owned = False
-                stop_now(client)
-            raise
-        finally:
-            if owned:
-                release(client, True, [])
+    with quiet_client(), owning(client, owned):  # Ctrl-C: the cluster stopped within bounds
+        watch = Watch(client, worker_timeout())
+        check_workers(client, watch.timeout)
+        for chunk in _windows(itertools.chain(first, batches), _window(client, first)):
+            pending: dict = {}
+            try:
+                _submit(client, chunk, records, rec_ids, runner, pending)
+                _gather(pending, on_result, watch)
+            finally:
+                if pending and not owned:
+                    release(client, False, [f for f, _ in pending.values()])
 
 
 def _here(tasks: Iterable, records: dict, rec_ids: list[str], on_result: Callable,

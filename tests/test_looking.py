@@ -13,10 +13,10 @@ import pytest
 from matplotlib.figure import Figure
 
 import urmx
+from urmx.analysis.recompute import compare, compared, recompute
 from urmx.cli import main
 from urmx.errors import InputError
 from urmx.plot import empty_axes, instability_history, panels, wall_of
-from urmx.recompute import compare, compared, recompute
 from urmx.reports import common as reporting
 from urmx.reports import grid as generic_report
 from urmx.study.table import to_dataframe
@@ -293,7 +293,7 @@ def test_show_reproduces_the_archive_and_refuses_a_changed_record(grid, tmp_path
 
 
 def test_show_refuses_another_kernel(grid, monkeypatch):
-    import urmx.recompute as R
+    import urmx.analysis.recompute as R
 
     monkeypatch.setattr(R, "SOURCE_HASH", "0" * 16)
     with pytest.raises(InputError, match="kernel"):

@@ -92,7 +92,7 @@ def test_the_resonance_view_reads_the_diaphragms_own_frequency(single):
     """What the reports read from ``frequency`` (`urmx.analysis.resonance`, whose result
     the paper report's resonance table and `urmx.paper.findings` use) is the coordinate
     itself, so the same whatever walls are selected."""
-    from urmx import analysis as A
+    from urmx.analysis import grid as A
 
     ranges = {"elcentro": (0.2, 7.0), "nahanni": (7.0, 9.0), "christchurch": (0.2, 3.0)}
     some = single.isel(wall=slice(0, 2))

@@ -27,9 +27,9 @@ import xarray as xr
 import urmx
 import urmx.netcdf
 import urmx.records
-from urmx import analysis as A
 from urmx import study as st
 from urmx import variables
+from urmx.analysis import grid as A
 from urmx.errors import OutputError, RunError, UrmxError
 
 DT = 0.01

@@ -13,8 +13,8 @@ import xarray as xr
 
 import urmx
 from urmx import fragility as F
-from urmx import fragility_analysis as FA
 from urmx import study as st
+from urmx.analysis import ida as FA
 from urmx.catalog import catalog_dir
 from urmx.cli import main
 from urmx.errors import InputError, MissingFileError

@@ -560,7 +560,7 @@ def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records
     """`urmx uncertainty-report` writes REPORT.md and its figures from a sampling IDA
     archive; its numbers are the archive's (the dispersions, the law's effect, the
     strongest parameter); any other archive is refused in one line."""
-    import urmx.uncertainty_analysis as UA
+    import urmx.analysis.sampling as UA
     from urmx.cli import main
     from urmx.reports.sampling import write_report
 

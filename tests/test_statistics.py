@@ -16,7 +16,7 @@ import xarray as xr
 
 import urmx
 from urmx import fragility as F
-from urmx import fragility_analysis as FA
+from urmx.analysis import ida as FA
 from urmx.catalog import catalog_dir
 from urmx.cli import main
 from urmx.errors import InputError

@@ -173,7 +173,7 @@ def test_the_variable_registry_imports_no_urmx_module():
 # compiles _march as one native function whose hot paths are inlined by hand and split
 # into calls would cost a call per event, and Tables declares the arrays that native call
 # is compiled for, one line each.
-MEASURED = ("study", "fragility", "catalog.py", "paper.py", "reports")
+MEASURED = ("study", "fragility", "catalog.py", "paper", "reports")
 LONGEST = 80
 
 

@@ -33,7 +33,7 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "fragility_analysis", "guard",
+_SUBMODULES = ("analysis", "catalog", "errors", "fragility", "guard",
                "kernel", "markdown", "model", "netcdf", "paper", "plot", "records",
                "reference", "reports", "simulation", "study", "variables")
 
@@ -49,6 +49,10 @@ MOVED = {
     "urmx.assessment_report": "urmx.reports.assessment",
     "urmx.predictors_report": "urmx.reports.predictors",
     "urmx.records.report": "urmx.reports.records",
+    "urmx.fragility_analysis": "urmx.analysis.ida",
+    "urmx.uncertainty_analysis": "urmx.analysis.sampling",
+    "urmx.predictors_analysis": "urmx.analysis.predictors",
+    "urmx.recompute": "urmx.analysis.recompute",
 }
 
 

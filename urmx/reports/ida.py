@@ -41,10 +41,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .. import fragility_analysis as FA
 from .. import plot as P
+from ..analysis import ida as FA
+from ..analysis.ida import GROUPS, STIFFEN
 from ..errors import InputError
-from ..fragility_analysis import GROUPS, STIFFEN
 from ..markdown import number as _fmt
 from ..markdown import table
 from ..plot import plot_capacity_resonance as plot_resonance

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .. import fragility_analysis as FA
 from .. import plot as P
+from ..analysis import ida as FA
+from ..analysis.ida import GROUPS, MEASURES, STIFFEN
 from ..errors import UrmxError
 from ..fragility.fits import CONFIDENCE
-from ..fragility_analysis import GROUPS, MEASURES, STIFFEN
 from ..markdown import number as _fmt
 from ..markdown import table
 from .common import (

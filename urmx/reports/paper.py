@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .. import analysis as A
 from .. import paper as PP
 from .. import plot as P
+from ..analysis import grid as A
 from ..markdown import number as _fmt
 from ..markdown import table
 from ..paper import STUDIES

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import predictors_analysis as pa
+from ..analysis import predictors as pa
 from .common import made_from
 
 LABELS = {"slenderness": "h/t", "height": "h", "thickness": "t",

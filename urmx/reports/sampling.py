@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .. import fragility_analysis as FA
 from .. import plot as P
-from .. import uncertainty_analysis as UA
+from ..analysis import ida as FA
+from ..analysis import sampling as UA
 from ..markdown import number as _fmt
 from ..markdown import table
 from ..uncertainty.sampler import PARAMETERS

@@ -30,16 +30,16 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import analysis as A
-from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
-from .config import records_dir
-from .errors import MissingFileError
-from .kernel import warm_up
-from .markdown import table
-from .model import PAPER_G, RIGID
-from .study.clients import get_client, owning
-from .study.engine import run_study
-from .variables import attrs as registry_attrs
+from ..analysis import grid as A
+from ..catalog import Catalog, CatalogError, catalog_dir, load_catalog
+from ..config import records_dir
+from ..errors import MissingFileError
+from ..kernel import warm_up
+from ..markdown import table
+from ..model import PAPER_G, RIGID
+from ..study.clients import get_client, owning
+from ..study.engine import run_study
+from ..variables import attrs as registry_attrs
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -176,7 +176,7 @@ def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float
     """Table V's significant frequency range of every paper record, from the records
     manifest's ``paper_frequency_range_hz`` (``{record id: (low, high)}`` [Hz])."""
     if manifest is None:
-        from .records import manifest as read_manifest
+        from ..records import manifest as read_manifest
         manifest = read_manifest()
     out = {}
     for rid, entry in manifest.items():
@@ -188,7 +188,7 @@ def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float
 
 
 def _manifest() -> dict:
-    from .records import manifest as read_manifest
+    from ..records import manifest as read_manifest
     try:
         return read_manifest()
     except (FileNotFoundError, ValueError):

@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import variables
-from .errors import InputError
-from .jitcache import SOURCE_HASH
-from .study.archive import open_archive
+from .. import variables
+from ..errors import InputError
+from ..jitcache import SOURCE_HASH
+from ..study.archive import open_archive
 
 #: the optional dimensions a cell may be picked along, with the study's default
 OPTIONAL = ("cor", "scale", "impact", "damping")
@@ -38,7 +38,7 @@ def load_archived_study(ds: xr.Dataset, where: str | os.PathLike, study_file: An
     """The study of an archive: `study_file` when given, else the study text the archive
     carries, read as if it lay in folder `where` (the file's own record files are
     resolved against it)."""
-    from .catalog import load_study, load_study_text
+    from ..catalog import load_study, load_study_text
 
     if study_file is not None:
         return load_study(study_file)
@@ -155,8 +155,8 @@ def recompute(archive: Any, wall: str, diaphragm: str, record: str, *,
         An unknown label, a missing choice, or a kernel or record that is not the
         archive's (`check_provenance`).
     """
-    from .simulation import simulate
-    from .study.samples import resolve_records
+    from ..simulation import simulate
+    from ..study.samples import resolve_records
 
     path = Path(archive)
     ds = open_archive(path)

@@ -417,7 +417,7 @@ def test_urmx_assess_command(tmp_path, capsys):
 def test_compare_rebuilds_the_walls_and_checks_the_records(use_records, monkeypatch):
     """Walls from the study file an archive holds, records from the manifest (served in
     memory), each checked against the archive: a changed catalog or record is refused."""
-    from urmx.catalog import load_study
+    from urmx.study.file import load_study
 
     study = load_study("fema-p695-ida")
     dt = 0.01

@@ -17,11 +17,12 @@ import urmx.records as R
 from urmx import errors as E
 from urmx import fragility as F
 from urmx import paper as P
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.cli import main
 from urmx.config import project_root, shipped_records
 from urmx.config import records_dir as _records_dir
 from urmx.reports import ida as FR
+from urmx.study.file import load_study
 
 AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
        "ACCELERATION TIME SERIES IN UNITS OF G\nNPTS=  8, DT=   {dt} SEC\n"

@@ -27,8 +27,9 @@ import urmx.records
 import urmx.variables
 from urmx import fragility as F
 from urmx import study as st
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.model import RIGID, Wall
+from urmx.study.file import load_study
 
 from .fixtures.records import record_file
 from .fixtures.signals import interruptible

@@ -19,10 +19,11 @@ import pytest
 import xarray as xr
 
 import urmx
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.errors import RunError
 from urmx.study import Lock, kinds
 from urmx.study.dataset import grid_coords
+from urmx.study.file import load_study
 
 from .fixtures.signals import killed_after_parts
 

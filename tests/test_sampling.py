@@ -24,7 +24,8 @@ import xarray as xr
 from scipy import stats
 
 import urmx
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
+from urmx.study.file import load_study
 from urmx.uncertainty import (
     ParameterError,
     apply,

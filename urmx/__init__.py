@@ -79,6 +79,32 @@ class _Moved(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 if not any(isinstance(f, _Moved) for f in sys.meta_path):
     sys.meta_path.insert(0, _Moved())
 
+#: names that left a module for another, kept there for one release: ``from urmx.catalog
+#: import load_study`` (the study file's parser, now `urmx.study.file`)
+MOVED_NAMES = {
+    "urmx.catalog": ("urmx.study.file", ("load_study", "load_study_text", "Study", "study_path",
+                                         "file_keys", "STUDY_FILE_KEYS", "STUDY_KEYS",
+                                         "History", "OwnRecord")),
+}
+
+
+def _names_moved(module: str) -> None:
+    """Give `module` a module ``__getattr__`` that serves its :data:`MOVED_NAMES` from
+    where they went (loaded on first use)."""
+    where, names = MOVED_NAMES[module]
+
+    def __getattr__(name):
+        if name in names:
+            return getattr(importlib.import_module(where), name)
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+
+    sys.modules[module].__getattr__ = __getattr__
+
+
+from . import catalog  # noqa: E402, F401 - light (config, errors, model); its moved names
+
+_names_moved("urmx.catalog")
+
 
 def __getattr__(name):
     if name in _LAZY:

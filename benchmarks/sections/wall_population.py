@@ -26,7 +26,7 @@ TARGET_MINUTES = 60.0  # issue 37: "well under an hour" on 2 cores [min]
 
 
 def _quick_study(tmp: Path) -> Path:
-    from urmx.catalog import study_path
+    from urmx.study.file import study_path
 
     text = study_path(STUDY).read_text(encoding="utf-8")
     start, end = text.index("records = ["), text.index("]\ncor =") + 2

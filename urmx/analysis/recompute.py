@@ -38,7 +38,7 @@ def load_archived_study(ds: xr.Dataset, where: str | os.PathLike, study_file: An
     """The study of an archive: `study_file` when given, else the study text the archive
     carries, read as if it lay in folder `where` (the file's own record files are
     resolved against it)."""
-    from ..catalog import load_study, load_study_text
+    from ..study.file import load_study, load_study_text
 
     if study_file is not None:
         return load_study(study_file)

@@ -122,7 +122,7 @@ def _open(archive) -> xr.Dataset:
 def _walls(ds: xr.Dataset, wall_ids: list[str], diaphragm_ids: list[str]
            ) -> dict[tuple[str, str], Wall]:
     """The cells' walls, from the study file the archive holds."""
-    from ..catalog import load_study
+    from ..study.file import load_study
 
     text = ds.attrs.get("study")
     if not text:

@@ -52,9 +52,9 @@ def replaced(old: str, new: str) -> None:
 
 
 def _ida(args) -> int:
-    from ..catalog import load_study
     from ..errors import InputError, check_output
     from ..study import check_scheduler
+    from ..study.file import load_study
     from .study import run_loaded
 
     replaced("ida", "run")

@@ -75,7 +75,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..catalog import Study, load_study
 from ..errors import InputError, OutputError, RunError, check_output, got
 from ..netcdf import write_netcdf
 from ..provenance import differs
@@ -101,6 +100,7 @@ from .clients import (
 )
 from .dataset import global_attrs
 from .definition import Definition, base, compare
+from .file import Study, load_study
 from .limits import MAX_CELLS, MAX_GB, check_size
 from .parts import Lock, PartStore, batch_key
 from .progress import Progress

@@ -14,12 +14,12 @@ import pytest
 import xarray as xr
 
 import urmx
+from urmx.analysis.assessment import compare
 from urmx.assess import (
     PROCEDURES,
     DesignSpectrum,
     Position,
     asce41_ht,
-    compare,
     doherty,
     ntc_kinematic,
     nzsee_c8,

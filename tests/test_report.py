@@ -128,3 +128,21 @@ def test_old_module_names_are_the_moved_modules():
     done = subprocess.run([sys.executable, "-m", "urmx.predictors_report", "--help"],
                           capture_output=True, text=True)
     assert done.returncode == 0 and "--replicates" in done.stdout
+
+
+def test_names_moved_out_of_a_module_are_still_served_there():
+    """`urmx.MOVED_NAMES`: the study file's names of `urmx.catalog` and `compare` of
+    `urmx.assess` are the moved objects; a name never there is still an AttributeError."""
+    import pytest
+
+    import urmx.analysis.assessment
+    import urmx.assess
+    import urmx.catalog
+    import urmx.study.file
+    from urmx.catalog import load_study
+
+    assert load_study is urmx.study.file.load_study and urmx.catalog.Study is \
+        urmx.study.file.Study
+    assert urmx.assess.compare is urmx.analysis.assessment.compare
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        urmx.catalog.nothing  # noqa: B018

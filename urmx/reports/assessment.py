@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..assess import compare
+from ..analysis.assessment import compare
 from ..markdown import number, table
 from ..provenance import code_version, describe, identity
 from .common import save_figure

@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..assess.demand import RecordDemand, position_of, record_demand
 from ..errors import InputError, MissingFileError
 from ..model import Wall
 from ..records.record import as_record
-from .demand import RecordDemand, position_of, record_demand
 
 CAPACITY_ATTRS = {"long_name": "record scale factor at which the procedure's check is at its "
                                "limit", "units": "1"}
@@ -65,7 +65,7 @@ def compare(archive, procedures: dict[str, Callable] | None = None, records_dir=
         ``reason`` a procedure is not applicable (procedure); the archive's provenance in
         the attributes.
     """
-    from . import PROCEDURES
+    from ..assess import PROCEDURES
 
     procs = dict(PROCEDURES if procedures is None else procedures)
     if not procs:

@@ -28,7 +28,10 @@ import xarray as xr
 from .. import variables
 from ..errors import InputError
 from ..jitcache import SOURCE_HASH
+from ..simulation import simulate
 from ..study.archive import open_archive
+from ..study.file import load_study, load_study_text
+from ..study.samples import resolve_records
 
 #: the optional dimensions a cell may be picked along, with the study's default
 OPTIONAL = ("cor", "scale", "impact", "damping")
@@ -38,8 +41,6 @@ def load_archived_study(ds: xr.Dataset, where: str | os.PathLike, study_file: An
     """The study of an archive: `study_file` when given, else the study text the archive
     carries, read as if it lay in folder `where` (the file's own record files are
     resolved against it)."""
-    from ..study.file import load_study, load_study_text
-
     if study_file is not None:
         return load_study(study_file)
     text = str(ds.attrs.get("study", ""))
@@ -155,9 +156,6 @@ def recompute(archive: Any, wall: str, diaphragm: str, record: str, *,
         An unknown label, a missing choice, or a kernel or record that is not the
         archive's (`check_provenance`).
     """
-    from ..simulation import simulate
-    from ..study.samples import resolve_records
-
     path = Path(archive)
     ds = open_archive(path)
     ida = "collapse_intensity" in ds

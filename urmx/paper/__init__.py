@@ -45,6 +45,7 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+from .. import records
 
 # ---- criteria thresholds (urmx's choices, not the paper's numbers) ----------------------------
 #: a magnitude the paper states as "nearly X" agrees within this absolute band [1]
@@ -176,8 +177,7 @@ def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float
     """Table V's significant frequency range of every paper record, from the records
     manifest's ``paper_frequency_range_hz`` (``{record id: (low, high)}`` [Hz])."""
     if manifest is None:
-        from ..records import manifest as read_manifest
-        manifest = read_manifest()
+        manifest = records.manifest()
     out = {}
     for rid, entry in manifest.items():
         text = entry.get("paper_frequency_range_hz")
@@ -188,9 +188,8 @@ def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float
 
 
 def _manifest() -> dict:
-    from ..records import manifest as read_manifest
     try:
-        return read_manifest()
+        return records.manifest()
     except (FileNotFoundError, ValueError):
         return {}
 

@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis import ida as FA
+from ..fragility import CONFIDENCE, bootstrap_lognormal
 from . import (
     display_scale,
     marker_size,
@@ -61,7 +62,6 @@ def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray, groups=None) -> tuple
     `urmx.fragility.bootstrap_lognormal`), or None."""
     from scipy.special import ndtr
 
-    from ..fragility import CONFIDENCE, bootstrap_lognormal
 
     ran = np.isfinite(cap)
     if ran.sum() < 5:

@@ -10,6 +10,7 @@ import xarray as xr
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..model import Wall
 from . import (
     display_scale,
     label,
@@ -68,8 +69,6 @@ def instability_history(ds: xr.Dataset, wall) -> xr.DataArray:
 
 def wall_of(ds: xr.Dataset):
     """The `urmx.Wall` of an analysis Dataset, from its ``wall_<field>`` attributes."""
-    from ..model import Wall
-
     fields = {k[len("wall_"):]: v for k, v in ds.attrs.items() if k.startswith("wall_")}
     for k in ("allow_unusual",):
         if k in fields:

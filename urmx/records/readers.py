@@ -37,7 +37,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config import UrmxWarning
-from ..errors import MissingFileError
+from ..errors import MissingFileError, numbers_argument, path_argument
+from .checks import counts_problem, motion_problem, quantity_problems, unit_problem
 from .errors import (
     ChannelError,
     MissingTimeStepError,
@@ -196,7 +197,6 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     """
     from obspy import Stream
 
-    from ..errors import path_argument
 
     path_argument("read", "path", path)
     return Stream([c.trace() for c in read_file(path, format, dt, unit, channel,
@@ -209,8 +209,6 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
     """:func:`read` without ObsPy: the checked channels as :class:`Samples` (data in m s-2,
     dt, header fields, provenance). Same arguments, checks and errors as :func:`read`;
     only ObsPy's own formats import ObsPy."""
-    from ..errors import path_argument
-
     path_argument("read_samples", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual).samples
 
@@ -222,8 +220,6 @@ def read_channel(path: str | os.PathLike, format: str | None = None, dt: float |
     """One channel of a record file as :class:`Samples`: `channel`, or the file's only
     one; a multi-channel file without `channel` is a :class:`ChannelError` listing its
     channels (never a silent first channel). Otherwise as :func:`read_samples`."""
-    from ..errors import path_argument
-
     path_argument("read_channel", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual, one=True,
                      response=response).samples[0]
@@ -330,8 +326,6 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
     RecordError, urmx.errors.MissingFileError
         As :func:`read`.
     """
-    from ..errors import path_argument
-
     path_argument("describe", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, channel, allow_unusual,
                                      one=True, response=response))[0]
@@ -341,8 +335,6 @@ def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str 
                  format: str | None = None, allow_unusual: bool = False) -> list[RecordFile]:
     """Every channel of a record file as a :class:`RecordFile`, reading the file once (same
     arguments and errors as :func:`describe`)."""
-    from ..errors import path_argument
-
     path_argument("describe_all", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, None, allow_unusual))
 
@@ -397,8 +389,6 @@ def detect_format(path: str | os.PathLike, *, allow_unusual: bool = False) -> st
     UnusualRecordError
         A file larger than `MAX_RECORD_BYTES` that is none of urmx's text formats.
     """
-    from ..errors import path_argument
-
     path_argument("detect_format", "path", path)
     return _sniff(Path(path), allow_unusual)[0]
 
@@ -1371,7 +1361,6 @@ def _parse_obspy(path: Path, format: str | None, raw: bytes,
     acceleration [m s-2]."""
     import obspy
 
-    from .checks import counts_problem, quantity_problems
 
     if format is None or format.upper() not in OBSPY_FORMATS:  # never auto-detect
         raise UnknownFormatError(path, f"ObsPy format {format!r} is not one urmx reads")
@@ -1555,8 +1544,6 @@ def _plausible(path: Path, label: str, ch: _Channel, values: np.ndarray, data: n
     stated unit against its values (`urmx.records.checks`); each problem refuses the
     record, or with ``allow_unusual`` becomes an ``overrode`` processing step (returned).
     `how`: (unit of the values, where it comes from, where the time step comes from)."""
-    from .checks import motion_problem, unit_problem
-
     file_unit, src, dt_source = how
     out = []
     lo, hi = DT_RANGE
@@ -1603,8 +1590,6 @@ def check_finite(data, label: str = "record", dt: float | None = None,
     Use it wherever samples arrive from outside (a Trace, an array): a NaN must be named as
     such, never taken for a zero.
     """
-    from ..errors import numbers_argument
-
     values = numbers_argument(label, "samples", data)
     bad = ~np.isfinite(values)
     if bad.any():

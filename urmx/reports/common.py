@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..jitcache import SOURCE_HASH
 from ..study.archive import open_archive  # noqa: F401 - re-exported for the reports
 
 #: the time stamp an archive's ``history`` lines start with (``2026-11-23T15:34:59+00:00 ``)
@@ -122,8 +123,6 @@ def made_from(ds: xr.Dataset, name: str = "archive", commit: bool = True) -> str
     or environment writes again (`urmx paper` in CI), whose text must not change with each
     new commit, or with the numba, llvmlite and Python builds the hash also stamps, when
     its numbers do not (issue 33, item 3); whether the kernel differs is still said."""
-    from ..jitcache import SOURCE_HASH
-
     at = str(ds.attrs.get("urmx_git_commit", "none"))
     kernel = str(ds.attrs.get("kernel_source_hash", "unknown"))
     code = ("an unrecorded commit" if at in ("none", "") else

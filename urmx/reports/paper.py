@@ -28,7 +28,7 @@ from ..markdown import number as _fmt
 from ..markdown import table
 from ..paper import STUDIES
 from ..variables import attrs as registry_attrs
-from .common import history_line, open_archive, save_figure
+from .common import history_line, made_from, open_archive, save_figure
 
 #: the paper's studies (`urmx.paper.STUDIES`) by the short name this report uses
 KINDS = dict(zip(STUDIES, ("single", "multi", "verification", "intensity"), strict=True))
@@ -204,7 +204,6 @@ def _preamble(rep: _Report, notes: list[str]) -> list[str]:
         dims = ", ".join(f"{d} {n}" for d, n in ds.sizes.items())
         rows.append([study_kind(ds), dims, history_line(ds)])
     lines += table(["study", "dimensions", "history (last line)"], rows) + [""]
-    from .common import made_from
 
     lines += [f"- `{study_kind(ds)}`: " + made_from(ds, commit=False)
               for ds in rep.studies.values()] + [""]

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import provenance
 from ..errors import InputError, RunError
 
 _ADDRESS = re.compile(r"^[a-z][a-z0-9+.-]*://\S+$")
@@ -306,11 +307,10 @@ def _identity_probe():
 
 def mismatch(worker: str, theirs: dict, when: str) -> RunError:
     """The error for a worker that runs other code than this process."""
-    from ..provenance import describe, identity
-
-    return RunError(f"worker {worker} runs other code than this process ({describe(theirs)} "
-                    f"there; {describe(identity())} here): {when}; give workers the same "
-                    "urmx and numpy")
+    here = provenance.describe(provenance.identity())
+    return RunError(f"worker {worker} runs other code than this process "
+                    f"({provenance.describe(theirs)} there; {here} here): {when}; give workers "
+                    "the same urmx and numpy")
 
 
 def check_workers(client: Any, timeout: float) -> int:
@@ -323,8 +323,6 @@ def check_workers(client: Any, timeout: float) -> int:
         No worker within `timeout`, a worker with other code (named, with both
         identities), or a scheduler that cannot be asked.
     """
-    from ..provenance import differs
-
     address = scheduler_address(client)
     try:
         client.wait_for_workers(1, timeout=timeout)
@@ -343,7 +341,7 @@ def check_workers(client: Any, timeout: float) -> int:
             continue
         if isinstance(theirs, BaseException):
             theirs = {"urmx": f"unknown ({type(theirs).__name__}: {theirs})"}
-        if differs(theirs):
+        if provenance.differs(theirs):
             raise mismatch(worker, theirs, "nothing was computed")
     return len(answers)
 
@@ -352,15 +350,14 @@ def run_stamped(runner: Callable[[dict, np.ndarray], dict], task: dict,
                 acceleration: np.ndarray) -> dict[str, Any]:
     """Run one batch on a worker (`runner`, a kind's ``run``) and return its result with
     the identity of the code that computed it and the worker's address."""
-    from ..provenance import identity
-
     try:
         from distributed import get_worker
 
         where = get_worker().address
     except (ImportError, ValueError):
         where = "this process"
-    return {"result": runner(task, acceleration), "identity": identity(), "worker": where}
+    return {"result": runner(task, acceleration), "identity": provenance.identity(),
+            "worker": where}
 
 
 # ---- a cluster that dies -------------------------------------------------------------------

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import variables
+from ..provenance import attrs
+from ..records.record import PROVENANCE
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -63,8 +65,6 @@ def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any
     (`urmx.provenance.attrs`: ``urmx_version`` with the git commit, ``urmx_git_commit``,
     ``urmx_git_dirty``, ``kernel_source_hash`` and the Python and library versions)."""
     from .. import __version__
-    from ..provenance import attrs
-
     cmd = command or f"urmx.run_study({study.name!r})"
     return {
         "title": study.title or study.name,
@@ -162,8 +162,6 @@ def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
     """The record dimension: ids, peaks, scale factors, time steps, and where each record
     comes from (`urmx.records.record.PROVENANCE`: file, SHA-256, format, channel, unit,
     source, processing, points; empty strings for records given in memory)."""
-    from ..records.record import PROVENANCE
-
     recs = [records[r] for r in study.records]
     coords = {
         "record": coord("record", "record", np.array(study.dims["record"], dtype=object)),

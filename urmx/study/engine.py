@@ -75,10 +75,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import InputError, OutputError, RunError, check_output, got
+from .. import netcdf, variables
+from .. import records as rec
+from ..errors import InputError, OutputError, RunError, UrmxError, check_output, got
 from ..netcdf import write_netcdf
 from ..provenance import differs
 from . import kinds
+from .archive import open_study
 from .batches import Batch, Cut
 from .cells import Cells
 from .clients import (
@@ -504,7 +507,6 @@ def _assemble(cells: Cells, sources: Sources, records: dict, attrs: dict,
     from the parts, with ``cell_key`` and netCDF chunks of one slab."""
     import xarray as xr
 
-    from .. import variables
 
     kind = cells.kind
     missing = sources.missing()
@@ -573,9 +575,6 @@ def input_files(study: Study, records_dir: str | os.PathLike | None = None
     it declares itself (``[records.<id>]``), and the records manifest and file of each of
     its manifest records (as far as the manifest can be read: a bad one is said when the
     records are loaded)."""
-    from .. import records as rec
-    from ..errors import UrmxError
-
     found = [("the study file", Path(study.path))] if study.path is not None else []
     found += [(f"the file of record {rid!r}", Path(own.path))
               for rid, own in study.own_records.items()]
@@ -755,7 +754,6 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     with Lock(parts, out):  # before reading records: a second run stops at once
         _into_archive(s, out, parts, force, records_dir, scheduler, progress, command,
                       batch_size, kernel)
-    from .archive import open_study
 
     return open_study(out)
 
@@ -808,10 +806,8 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
 def _remove_stale(out: Path, parts: Path, notes: list[str]) -> None:
     """Remove the temporary files of this archive and its parts that runs killed while
     writing them left (their PID no longer runs), and say so."""
-    from ..netcdf import remove_stale
-
-    gone = remove_stale(out.parent, f".{out.name}.", ".tmp")
-    gone += remove_stale(parts, ".", ".npz.tmp")
+    gone = netcdf.remove_stale(out.parent, f".{out.name}.", ".tmp")
+    gone += netcdf.remove_stale(parts, ".", ".npz.tmp")
     for path, pid in gone:
         notes.append(f"urmx: removed {path}, a temporary file left by a run that was killed "
                      f"while writing it (pid {pid}, no longer running)")
@@ -839,12 +835,11 @@ def _kept(exc: OutputError, parts: Path, then: str) -> OutputError:
     when the disk is full, else fix the cause)."""
     import errno
 
-    from ..netcdf import disk_full
 
     n = PartStore(parts, ()).count()
     if not n:
         return OutputError(f"{exc}; no finished batch is kept")
-    full = getattr(exc.__cause__, "errno", None) == errno.ENOSPC or disk_full(parts)
+    full = getattr(exc.__cause__, "errno", None) == errno.ENOSPC or netcdf.disk_full(parts)
     return OutputError(f"{exc}; {n} finished batch{'es' if n > 1 else ''} kept in "
                        f"{str(parts)!r}: {'free space on its disk' if full else 'fix that'} "
                        f"{then}")

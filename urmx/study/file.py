@@ -44,6 +44,7 @@ from ..catalog import (
 )
 from ..errors import MissingFileError, path_argument
 from ..model import RIGID, T_REST, Wall
+from ..records.readers import UNIT_FACTORS
 from . import kinds
 
 #: every key of a study file by table: the one declaration the loader checks tables
@@ -461,8 +462,6 @@ def _own_records(src: Source) -> tuple[dict[str, OwnRecord], dict[str, list[str]
 
 def _record_options(src: Source, key: str, t: dict) -> dict[str, Any]:
     """The reading options of a ``[records.<id>]`` table, checked."""
-    from ..records.readers import UNIT_FACTORS
-
     out: dict[str, Any] = {}
     for k in ("channel", "format", "unit", "sha256", "pattern", "file", "folder"):
         if k in t and not isinstance(t[k], str):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from .. import records as rec
 from ..config import data_dir
 from ..errors import MissingFileError, UrmxError
 from ..records.record import Record
@@ -35,8 +36,6 @@ def resolve_records(study, records_dir: str | os.PathLike | None = None) -> dict
         a file that cannot be read as its table says (wrong channel, no dt, ...) or that
         differs from its pinned ``sha256``: each with the study file, key and line.
     """
-    from .. import records as rec
-
     own = getattr(study, "own_records", {})
     manifest = _manifest(rec, records_dir, required=any(r not in own for r in study.records))
     for rid in study.records:
@@ -70,8 +69,6 @@ def _manifest(rec, records_dir, required: bool) -> dict[str, dict]:
 
 def _own(study, o, in_manifest: bool) -> Record:
     """The Record of one of the study file's own record files, read once."""
-    from .. import records as rec
-
     key = f"records.{o.table}"
     if in_manifest and not o.override:
         raise study.error(key, f"record id {o.id!r} is also a records-manifest id: choose "

@@ -28,6 +28,7 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+from ..errors import got
 
 #: cells listed per differing variable by `format_diff`
 LISTED = 10
@@ -40,8 +41,6 @@ def _open(archive: Any) -> tuple[xr.Dataset, str]:
     if isinstance(archive, xr.Dataset):
         return archive, "(Dataset)"
     if not isinstance(archive, (str, os.PathLike)):
-        from ..errors import InputError, got
-
         raise InputError(f"archive must be a study archive's file name or an "
                          f"xarray.Dataset, got {got(archive)}")
     return open_archive(archive, "archive"), str(archive)

@@ -23,7 +23,7 @@ from ...kernel import run as run_kernel
 from ...model import T_REST
 from ...netcdf import INT_FILL  # the integer outputs' _FillValue on disk
 from ..batches import Batch
-from ..dataset import MISSING, NOT_RUN, STATUS, VALID
+from ..dataset import MISSING, NOT_RUN, STATUS, VALID, coord, grid_coords, status_attrs
 from .kind import Kind
 
 if TYPE_CHECKING:
@@ -130,8 +130,6 @@ def _outputs(cells: dict) -> dict[str, Any]:
 
 
 def output_attrs(name: str) -> dict[str, Any]:
-    from ..dataset import status_attrs
-
     if name == "status":
         return status_attrs()
     attrs = variables.attrs(name)
@@ -144,8 +142,6 @@ def output_attrs(name: str) -> dict[str, Any]:
 
 
 def _added_coords(study: Any) -> dict[str, xr.Variable]:
-    from ..dataset import coord
-
     dims, coords = study.dims, {}
     for k in ("scale", "damping"):
         if k in dims:
@@ -161,7 +157,6 @@ def assemble(study: Any, records: dict, cells: dict, extras: dict,
     added dimensions' coordinates, and the kept histories (`extras`, by label)."""
     import xarray as xr
 
-    from ..dataset import grid_coords
 
     names = list(study.dims)
     data_vars = {name: xr.Variable(names, arr, attrs=output_attrs(name))
@@ -181,7 +176,6 @@ def _histories(study: Any, hist: dict) -> tuple[dict, dict]:
     time axis."""
     import xarray as xr
 
-    from ..dataset import coord
 
     cells = study.histories
     labels = [h.label for h in cells]

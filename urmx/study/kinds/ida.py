@@ -37,6 +37,7 @@ from ...kernel import run as run_kernel
 from ...netcdf import INT_FILL
 from ...records.measures import dominant_frequency
 from ..batches import Batch
+from ..dataset import grid_coords
 from . import grid
 from .kind import Kind
 
@@ -329,7 +330,6 @@ def _data_vars(cells: dict, fits: dict, measures: dict,
 def _coords(study: Any, records: dict, cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
     import xarray as xr
 
-    from ..dataset import grid_coords
 
     k = cells["intensity"].shape[-1]
     periods = np.array([[fragility.rocking_period(study.wall(w, d)) for d in study.diaphragms]

@@ -22,27 +22,25 @@ def register(sub) -> None:
     study_options(p)
     p.set_defaults(handler=_ida)
 
-    p = sub.add_parser(
-        "fragility-report", help="old name of `urmx report` for an IDA archive (kept for one "
-                                 "release) -> reports/fragility/",
-        description="Replaced by `urmx report`: the report of an IDA archive (IDA and "
-                    "fragility curves, intensity measures, collapse risk).")
-    p.add_argument("archive", metavar="FILE.nc", help="IDA archive")
-    p.add_argument("--out", default="reports/fragility", metavar="DIR",
-                   help="output folder (default: reports/fragility)")
+    p = _report_alias(sub, "fragility-report", "ida", "an IDA archive", "fragility",
+                      "IDA and fragility curves, intensity measures, collapse risk")
     risk_options(p)
-    p.set_defaults(handler=_report, writer="ida")
+    _report_alias(sub, "uncertainty-report", "sampling", "a sampling-study archive",
+                  "uncertainty", "sensitivity, spread of the capacity, impact laws")
 
+
+def _report_alias(sub, name: str, writer: str, what: str, folder: str, holds: str):
+    """The parser of an old report command: `writer`'s report of `what` into
+    ``reports/<folder>`` by default."""
     p = sub.add_parser(
-        "uncertainty-report",
-        help="old name of `urmx report` for a sampling-study archive (kept for one "
-             "release) -> reports/uncertainty/",
-        description="Replaced by `urmx report`: the report of a sampling-study archive "
-                    "(sensitivity, spread of the capacity, impact laws).")
-    p.add_argument("archive", metavar="FILE.nc", help="sampling-study archive")
-    p.add_argument("--out", default="reports/uncertainty", metavar="DIR",
-                   help="output folder (default: reports/uncertainty)")
-    p.set_defaults(handler=_report, writer="sampling")
+        name, help=f"old name of `urmx report` for {what} (kept for one release) -> "
+                   f"reports/{folder}/",
+        description=f"Replaced by `urmx report`: the report of {what} ({holds}).")
+    p.add_argument("archive", metavar="FILE.nc", help=what.split(" ", 1)[1])
+    p.add_argument("--out", default=f"reports/{folder}", metavar="DIR",
+                   help=f"output folder (default: reports/{folder})")
+    p.set_defaults(handler=_report, writer=writer)
+    return p
 
 
 def replaced(old: str, new: str) -> None:

@@ -57,7 +57,7 @@ _PUBLIC = {
     "resolve_records": "samples", "RecordData": "samples",
     "to_dataframe": "table",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
-    "load_study": "file", "load_study_text": "file", "study_path": "file", "Study": "file",
+    "load_study": "file", "study_path": "file", "Study": "file",
 }
 _SUBMODULES = ("file", "engine", "limits", "cells", "batches", "parts", "sources", "clients",
                "progress", "dataset", "archive", "samples", "kinds", "summary", "table")

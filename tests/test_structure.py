@@ -292,6 +292,12 @@ def test_the_late_import_check_fails_on_a_late_import(tmp_path):
 #: the event handler it inlines (kernel.handle_event) as one native function whose hot paths
 #: are inlined by hand; split into calls they would cost a call per event
 EXEMPT = {"kernel.py:_march", "kernel.py:handle_event"}
+#: long functions in the sources the kernel's hash covers (`urmx.jitcache.COMPILED_MODULES`):
+#: editing them changes every archive's ``kernel_source_hash``, so that a resumed run
+#: computes its cells again, ``urmx show`` refuses the committed archives and the paper's
+#: report says its archives' kernel is not the current one. They are split (commits
+#: b3fa28d: Wall.in_building, c0e8fa1: native._shim) with the next change of the kernel.
+HASHED = {"model.py:in_building", "native.py:_shim"}
 LONGEST = 80
 
 
@@ -318,7 +324,7 @@ def test_no_function_longer_than_80_lines_anywhere():
     found = long_functions(paths)
     print(f"functions over {LONGEST} lines: {', '.join(found) or 'none'} (exempt: "
           f"{', '.join(sorted(EXEMPT))})")
-    assert {f.split(" (")[0] for f in found} == NOT_YET
+    assert {f.split(" (")[0] for f in found} == NOT_YET | HASHED
 
 
 def test_the_length_check_fails_on_a_long_function(tmp_path):

@@ -5,7 +5,7 @@ import pytest
 import xarray as xr
 from numpy.testing import assert_allclose
 
-from urmx import analysis as A
+from urmx.analysis import grid as A
 
 from .fixtures.studies import single_storey
 

@@ -14,12 +14,12 @@ import pytest
 import xarray as xr
 
 import urmx
+from urmx.analysis.assessment import compare
 from urmx.assess import (
     PROCEDURES,
     DesignSpectrum,
     Position,
     asce41_ht,
-    compare,
     doherty,
     ntc_kinematic,
     nzsee_c8,
@@ -340,7 +340,7 @@ def test_compare_on_a_synthetic_archive():
 
 
 def test_assessment_report_on_a_synthetic_archive(tmp_path):
-    from urmx.assessment_report import write_report
+    from urmx.reports.assessment import write_report
 
     walls = {("w1", "D1"): building_wall(0.23), ("w1", "D1/both"): building_wall(0.23, "both"),
              ("w2", "D1"): building_wall(0.35), ("w2", "D1/both"): building_wall(0.35, "both")}
@@ -417,7 +417,7 @@ def test_urmx_assess_command(tmp_path, capsys):
 def test_compare_rebuilds_the_walls_and_checks_the_records(use_records, monkeypatch):
     """Walls from the study file an archive holds, records from the manifest (served in
     memory), each checked against the archive: a changed catalog or record is refused."""
-    from urmx.catalog import load_study
+    from urmx.study.file import load_study
 
     study = load_study("fema-p695-ida")
     dt = 0.01

@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from urmx.catalog import load_catalog, load_study
+from urmx.catalog import load_catalog
 from urmx.paper import calibrate, calibration_report, load_paper
+from urmx.study.file import load_study
 
 
 @pytest.fixture(scope="module")

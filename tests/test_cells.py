@@ -25,12 +25,12 @@ import xarray as xr
 
 import urmx
 from urmx import study as st
-from urmx.catalog import load_study
 from urmx.errors import OutputError, RunError
 from urmx.study import kinds
 from urmx.study.batches import Cut
 from urmx.study.cells import Cells
 from urmx.study.dataset import coord, grid_coords
+from urmx.study.file import load_study
 from urmx.study.limits import SizeError
 
 from .fixtures.signals import killed_after_parts

@@ -347,9 +347,9 @@ def test_the_jobqueue_recipe_runs_on_the_client_it_makes(tmp_path, monkeypatch, 
 
     real_get_client = engine.get_client
 
-    def spy(scheduler):
+    def spy(scheduler, *rest, **kw):
         handed.append(scheduler)
-        return real_get_client(scheduler)
+        return real_get_client(scheduler, *rest, **kw)
 
     monkeypatch.setattr(dask_jobqueue, "SLURMCluster", LocalSLURM)
     monkeypatch.setattr(engine, "get_client", spy)

@@ -27,8 +27,9 @@ import urmx.records
 import urmx.variables
 from urmx import fragility as F
 from urmx import study as st
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.model import RIGID, Wall
+from urmx.study.file import load_study
 
 from .fixtures.records import record_file
 from .fixtures.signals import interruptible
@@ -885,7 +886,7 @@ def stiff_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
 
 
 def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path):
-    from urmx.fragility_report import write_report
+    from urmx.reports.ida import write_report
 
     p = make_study(REP_IDA, "rep.toml")
     ds = st.run_study(p, kernel=stiff_kernel, scheduler="serial", progress=False)

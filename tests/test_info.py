@@ -12,11 +12,13 @@ import pytest
 import xarray as xr
 
 import urmx
-from urmx import fragility_report, generic_report, jitcache
+from urmx import jitcache
 from urmx.cli import main
 from urmx.markdown import number
 from urmx.model import PAPER_G
 from urmx.provenance import code_version
+from urmx.reports import grid as generic_report
+from urmx.reports import ida as fragility_report
 from urmx.study.summary import diff, format_info, info
 
 GRID = """\
@@ -220,3 +222,25 @@ def test_fragility_report_of_one_and_two_walls(ida, tmp_path):
         assert f"| s12 | 12 | {number(median / PAPER_G)} (" in text  # in g
     # the command line as well, on the archive of two walls
     assert main(["fragility-report", ida, "--out", str(tmp_path / "cli")]) == 0
+
+
+def test_urmx_report_chooses_the_report_by_the_archives_kind(ida, grid, tmp_path, capsys):
+    """`urmx report` writes an IDA archive's fragility report (the one `urmx fragility-report`
+    wrote, which stays as an alias saying what replaced it) and a grid archive's generic
+    report; --hazard belongs to the IDA report only."""
+    from urmx.reports import REPORTS, writer
+
+    assert main(["report", ida, "--out", str(tmp_path / "new"), "--years", "30"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["fragility-report", ida, "--out", str(tmp_path / "old"), "--years", "30"]) == 0
+    assert capsys.readouterr().err.strip() == ("urmx fragility-report: replaced by `urmx "
+                                               "report` (this alias goes in the next release)")
+    new = (tmp_path / "new" / "REPORT.md").read_text()
+    assert new == (tmp_path / "old" / "REPORT.md").read_text()
+    assert new.startswith("# Collapse fragility") and "probability of collapse in 30 years" in new
+    with xr.open_dataset(ida) as a, xr.open_dataset(grid) as g:
+        assert writer(a) is REPORTS["ida"] is fragility_report.write_report
+        assert writer(g) is REPORTS["grid"] is generic_report.write_report
+    code = main(["report", grid, "--out", str(tmp_path / "g"), "--hazard", "x.csv"])
+    assert code == 2 and "--hazard does not apply to the report of a grid archive" in \
+        capsys.readouterr().err

@@ -19,10 +19,11 @@ import pytest
 import xarray as xr
 
 import urmx
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.errors import RunError
 from urmx.study import Lock, kinds
 from urmx.study.dataset import grid_coords
+from urmx.study.file import load_study
 
 from .fixtures.signals import killed_after_parts
 
@@ -200,3 +201,76 @@ def test_a_batch_of_each_kind_imports_numpy_only(make_study, tmp_path, extra):
     done = subprocess.run([sys.executable, "-c", BATCH, str(job), *HEAVY],
                           capture_output=True, text=True, check=True)
     assert json.loads(done.stdout.splitlines()[-1]) == []
+
+
+# ---- a new kind end to end: one module's worth of code + one line in each registry ---------
+
+def tiny_parse(study):
+    return float(study.tables["tiny"].get("gain", 1.0))
+
+
+def tiny_report(archive, out_dir):
+    """The tiny kind's report (what ``reports/tiny.py`` would hold): its cells and the mean
+    of its one output."""
+    from pathlib import Path
+
+    from urmx.study.archive import open_archive
+
+    ds = open_archive(archive)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "REPORT.md"
+    path.write_text(f"# {ds.attrs['study_name']}\n\n{ds.value.size} cells, mean value "
+                    f"{float(ds.value.mean()):.6g}\n", encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def tiny():
+    """The kind ``tiny`` (the toy's functions, its own table) registered for one test with
+    one line in the kinds' registry and one in the reports', then removed from both."""
+    from urmx.reports import REPORTS
+
+    kinds.register(kinds.Kind(name="tiny", table="tiny", unit="cells", outputs=("value",),
+                              parse=tiny_parse, task=toy_task, run=toy_run,
+                              assemble=toy_assemble))
+    REPORTS["tiny"] = tiny_report
+    yield
+    kinds.unregister("tiny")
+    del REPORTS["tiny"]
+
+
+def test_a_new_kind_runs_and_reports_with_one_line_in_each_registry(tiny, make_study,
+                                                                   use_records, tmp_path,
+                                                                   capsys):
+    """`urmx run` and `urmx report` serve a kind registered from outside: the report is
+    the kind's own (chosen by the archive's kind), its numbers those of the archive; once
+    removed, the kind is unknown again and its archive gets the default report."""
+    from urmx.cli import main
+    from urmx.reports import REPORTS, writer
+    from urmx.study.summary import kind_of
+
+    use_records(ACC, SCALE, DT)
+    study = make_study(STUDY.replace("toy-study", "tiny-study").replace("[study.toy]",
+                                                                       "[study.tiny]"))
+    out = tmp_path / "tiny.nc"
+    assert main(["run", str(study), "--out", str(out), "--scheduler", "serial",
+                 "--quiet"]) == 0
+    ds = urmx.open_study(out).load()
+    assert kind_of(ds) == "tiny" and writer(ds) is tiny_report
+    # value = gain 2 * record peak (2 or 3) * wall height * cor, as the toy computes it
+    peak = xr.DataArray([2.0, 3.0], dims="record", coords={"record": ["quake", "shake"]})
+    expected = 2.0 * peak * ds.height * ds.cor
+    np.testing.assert_allclose(ds.value.values, expected.broadcast_like(ds.value)
+                               .transpose(*ds.value.dims).values, rtol=1e-12)
+    assert main(["report", str(out), "--out", str(tmp_path / "rep")]) == 0
+    text = (tmp_path / "rep" / "REPORT.md").read_text()
+    assert text == f"# tiny-study\n\n24 cells, mean value {float(expected.mean()):.6g}\n"
+    capsys.readouterr()
+    kinds.unregister("tiny")
+    del REPORTS["tiny"]
+    assert "tiny" not in {k.name for k in kinds.registered()} and writer(ds) is not tiny_report
+    kinds.register(kinds.Kind(name="tiny", table="tiny", unit="cells", outputs=("value",),
+                              parse=tiny_parse, task=toy_task, run=toy_run,
+                              assemble=toy_assemble))  # for the fixture's removal
+    REPORTS["tiny"] = tiny_report

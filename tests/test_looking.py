@@ -13,11 +13,12 @@ import pytest
 from matplotlib.figure import Figure
 
 import urmx
-from urmx import generic_report, reporting
+from urmx.analysis.recompute import compare, compared, recompute
 from urmx.cli import main
 from urmx.errors import InputError
 from urmx.plot import empty_axes, instability_history, panels, wall_of
-from urmx.recompute import compare, compared, recompute
+from urmx.reports import common as reporting
+from urmx.reports import grid as generic_report
 from urmx.study.table import to_dataframe
 
 RECORDS = """
@@ -143,7 +144,7 @@ def test_percentages_ratios_and_degenerate_intervals():
 # ---- reports of small studies ----------------------------------------------------------------
 
 def test_small_ida_reports_state_nothing_below_the_minimum(ida, tmp_path, saved, capsys):
-    from urmx.fragility_report import write_report
+    from urmx.reports.ida import write_report
 
     report = write_report(ida, tmp_path / "frag").read_text(encoding="utf-8")
     assert saved and all(n_empty == 0 for _, _, n_empty in saved), saved
@@ -292,7 +293,7 @@ def test_show_reproduces_the_archive_and_refuses_a_changed_record(grid, tmp_path
 
 
 def test_show_refuses_another_kernel(grid, monkeypatch):
-    import urmx.recompute as R
+    import urmx.analysis.recompute as R
 
     monkeypatch.setattr(R, "SOURCE_HASH", "0" * 16)
     with pytest.raises(InputError, match="kernel"):
@@ -353,7 +354,7 @@ def test_history_lists_every_contributing_run(tmp_path):
 def test_sensitivity_figure_says_negative_indices_are_noise():
     import xarray as xr
 
-    from urmx.uncertainty_report import _plot_sensitivity
+    from urmx.reports.sampling import _plot_sensitivity
 
     s1 = np.array([[[0.5, -0.26]]])  # wall, diaphragm, parameter
     sens = xr.Dataset({"prcc": (("wall", "diaphragm", "parameter"), s1 * 0.5),
@@ -371,7 +372,7 @@ def test_sensitivity_figure_says_negative_indices_are_noise():
 def test_one_record_ida_reports_draw_no_empty_axes(tmp_path, saved):
     """One wall under one record: no fit, no rate, no interval; every figure still says
     something in each panel and the report says why the numbers are missing."""
-    from urmx.fragility_report import write_report
+    from urmx.reports.ida import write_report
 
     _records(tmp_path)
     study = tmp_path / "one.toml"
@@ -405,7 +406,7 @@ def test_at_the_minimum_the_statistics_are_stated(ida, tmp_path, monkeypatch):
     """With the minimum lowered to the archive's 3 records, the same report recommends a
     measure, with its share of records in two significant digits, and prints intervals
     (a degenerate one flagged and explained)."""
-    from urmx.fragility_report import write_report
+    from urmx.reports.ida import write_report
 
     monkeypatch.setattr(reporting, "MIN_RECORDS", 3)
     report = write_report(ida, tmp_path / "frag").read_text(encoding="utf-8")

@@ -254,7 +254,8 @@ def test_ordinary_wall_dict_is_unchanged():
 
 def _study_of_every_diaphragm(tmp_path):
     """A study of every parametric wall on every catalog diaphragm, single and higher storey."""
-    from urmx.catalog import load_catalog, load_study
+    from urmx.catalog import load_catalog
+    from urmx.study.file import load_study
 
     ids = list(load_catalog().diaphragms)
     labels = ", ".join(f'"{d}/{s}"' for d in ids for s in ("top", "both"))

@@ -24,9 +24,10 @@ import xarray as xr
 
 import urmx
 from urmx import study as st
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.cli import main
 from urmx.errors import InputError, OutputError, UrmxError
+from urmx.study.file import load_study
 
 from .test_cells import _counting, _own, _quiet_run
 from .test_cells import own_records as own_records  # noqa: F401 - a fixture
@@ -92,7 +93,7 @@ def test_the_resonance_view_reads_the_diaphragms_own_frequency(single):
     """What the reports read from ``frequency`` (`urmx.analysis.resonance`, whose result
     the paper report's resonance table and `urmx.paper.findings` use) is the coordinate
     itself, so the same whatever walls are selected."""
-    from urmx import analysis as A
+    from urmx.analysis import grid as A
 
     ranges = {"elcentro": (0.2, 7.0), "nahanni": (7.0, 9.0), "christchurch": (0.2, 3.0)}
     some = single.isel(wall=slice(0, 2))
@@ -267,7 +268,7 @@ WRONG = [
     ("open-study-flipped", lambda t: urmx.open_study(_flipped(t)).load(),
      "flipped.nc': variable 'peak_lower_drift_family1' cannot be read (NetCDF: HDF error): "
      "the file is damaged; run its study again"),
-    ("load-study-int", lambda t: urmx.catalog.load_study(42),
+    ("load-study-int", lambda t: urmx.study.load_study(42),
      "load_study: path must be a file name (str or path), got 42 (int)"),
     ("read-wall-none", lambda t: urmx.catalog.read_wall(None),
      "read_wall: path must be a file name (str or path), got None (NoneType)"),

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from urmx import analysis as A
 from urmx import plot as P
+from urmx.analysis import grid as A
 
 RANGES = {"elcentro": (0.2, 7.0), "nahanni": (7.0, 9.0), "christchurch": (0.2, 3.0)}
 

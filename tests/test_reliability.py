@@ -27,9 +27,9 @@ import xarray as xr
 import urmx
 import urmx.netcdf
 import urmx.records
-from urmx import analysis as A
 from urmx import study as st
 from urmx import variables
+from urmx.analysis import grid as A
 from urmx.errors import OutputError, RunError, UrmxError
 
 DT = 0.01
@@ -515,7 +515,7 @@ def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
     reference = _run(gaps)
     out = tmp_path / "parts.nc"
     parts = tmp_path / "parts.nc.parts"
-    study = urmx.catalog.load_study(gaps)
+    study = urmx.study.load_study(gaps)
     records = st.resolve_records(study)
     tasks = st.batch_tasks(study, records, 2, fake_kernel)
     assert len(tasks) == 6
@@ -549,7 +549,7 @@ def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tm
     reference = _run_ida(ida_gaps)
     out = tmp_path / "ida.nc"
     parts = tmp_path / "ida.nc.parts"
-    study = urmx.catalog.load_study(ida_gaps)
+    study = urmx.study.load_study(ida_gaps)
     records = st.resolve_records(study)
     tasks = st.batch_tasks(study, records, 2, ida_kernel)
     assert len(tasks) == 6 and all(b.key.startswith("ida-") for b, _ in tasks)
@@ -621,7 +621,7 @@ def test_parts_of_another_kernel_source_are_recomputed(fake_records, gaps, ida_g
         assert 0 < kept < 6
         calls.clear()
 
-    study = urmx.catalog.load_study(path)
+    study = urmx.study.load_study(path)
     records = st.resolve_records(study)
     old_keys = {b.key for b, _ in st.batch_tasks(study, records, 2, kernel)}
     # same sources: the kept parts are reused

@@ -3,7 +3,7 @@
 import numpy as np
 
 from urmx.cli import main
-from urmx.report import study_kind, write_report
+from urmx.reports.paper import study_kind, write_report
 
 from .fixtures import paper_studies as F
 from .fixtures.studies import multi_storey, single_storey
@@ -43,10 +43,10 @@ def test_full_report(tmp_path):
 
 
 def test_figures_in_paper_order_and_units(tmp_path):
-    from urmx import analysis as A
     from urmx import plot as P
+    from urmx.analysis import grid as A
     from urmx.paper import load_paper
-    from urmx.report import _paper_order, _record_titles
+    from urmx.reports.paper import _paper_order, _record_titles
 
     ds = F.single()
     assert _paper_order(ds, load_paper()) == ["nahanni", "christchurch", "elcentro"]
@@ -106,3 +106,43 @@ def test_cli_report(tmp_path, capsys):
 def test_cli_missing_file_is_one_line_error(tmp_path, capsys):
     assert main(["report", str(tmp_path / "nope.nc"), "--out", str(tmp_path)]) == 2
     assert "no study archive" in capsys.readouterr().err
+
+
+def test_old_module_names_are_the_moved_modules():
+    """Each old module name of `urmx.MOVED` imports the module that replaced it (the same
+    object, its own __spec__ kept), and ``python -m`` of an old name runs the new module."""
+    import importlib
+    import subprocess
+    import sys
+
+    import urmx
+
+    assert len(urmx.MOVED) == 13
+    for old, new in urmx.MOVED.items():
+        module = importlib.import_module(old)
+        assert module is importlib.import_module(new) and module.__spec__.name == new
+    from urmx.fragility_report import write_report as old_writer
+
+    from urmx.reports import REPORTS
+    assert old_writer is REPORTS["ida"] and urmx.reporting is urmx.reports.common
+    done = subprocess.run([sys.executable, "-m", "urmx.predictors_report", "--help"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and "--replicates" in done.stdout
+
+
+def test_names_moved_out_of_a_module_are_still_served_there():
+    """`urmx.MOVED_NAMES`: the study file's names of `urmx.catalog` and `compare` of
+    `urmx.assess` are the moved objects; a name never there is still an AttributeError."""
+    import pytest
+
+    import urmx.analysis.assessment
+    import urmx.assess
+    import urmx.catalog
+    import urmx.study.file
+    from urmx.catalog import load_study
+
+    assert load_study is urmx.study.file.load_study and urmx.catalog.Study is \
+        urmx.study.file.Study
+    assert urmx.assess.compare is urmx.analysis.assessment.compare
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        urmx.catalog.nothing  # noqa: B018

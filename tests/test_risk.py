@@ -13,8 +13,8 @@ import xarray as xr
 
 import urmx
 from urmx import fragility as F
-from urmx import fragility_analysis as FA
 from urmx import study as st
+from urmx.analysis import ida as FA
 from urmx.catalog import catalog_dir
 from urmx.cli import main
 from urmx.errors import InputError, MissingFileError
@@ -157,7 +157,7 @@ def test_one_ida_run_gives_the_capacities_in_every_measure(fake_records, make_st
     assert in_pga.record_sa_avg.dims == ("wall", "diaphragm", "record")
     np.testing.assert_allclose(in_pga.record_pga, in_pga.record_intensity.isel(
         wall=0, diaphragm=0))
-    spec = urmx.catalog.load_study(make_study(IDA_STUDY, "again.toml"))
+    spec = urmx.study.load_study(make_study(IDA_STUDY, "again.toml"))
     wall = spec.wall(spec.walls[1], spec.diaphragms[0])
     for rid in ACC:  # the record as analysed: scale factor 2 on "shake"
         acc = ACC[rid] * (2.0 if rid == "shake" else 1.0)
@@ -193,7 +193,7 @@ def test_sa_avg_range_in_a_study_file(fake_records, make_study):
     bad = make_study(IDA_STUDY.replace('im = "pga"', 'im = "pga"\nsa_avg_range = [1.5, 0.2]'),
                      "bad.toml")
     with pytest.raises(ValueError, match=r"bad.toml:\d+: study.ida.sa_avg_range: .*0 < low"):
-        urmx.catalog.load_study(bad)
+        urmx.study.load_study(bad)
 
 
 @pytest.fixture

@@ -24,7 +24,8 @@ import xarray as xr
 from scipy import stats
 
 import urmx
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
+from urmx.study.file import load_study
 from urmx.uncertainty import (
     ParameterError,
     apply,
@@ -560,9 +561,9 @@ def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records
     """`urmx uncertainty-report` writes REPORT.md and its figures from a sampling IDA
     archive; its numbers are the archive's (the dispersions, the law's effect, the
     strongest parameter); any other archive is refused in one line."""
-    import urmx.uncertainty_analysis as UA
+    import urmx.analysis.sampling as UA
     from urmx.cli import main
-    from urmx.uncertainty_report import write_report
+    from urmx.reports.sampling import write_report
 
     use_records(ACC, SCALE, DT)
     path = make_study(STUDY.replace("samples = 5", "samples = 10") + IDA, "rep.toml")
@@ -602,5 +603,6 @@ def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records
     done = subprocess.run([sys.executable, "-m", "urmx.cli", "uncertainty-report",
                            str(tmp_path / "grid.nc"), "--out", str(tmp_path / "x")],
                           capture_output=True, text=True, cwd=ROOT)
-    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    said = done.stderr.strip().splitlines()  # the alias's note, then the one-line error
+    assert done.returncode == 2 and len(said) == 2 and "replaced by `urmx report`" in said[0]
     assert "not a sampling-study archive" in done.stderr

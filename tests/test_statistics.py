@@ -16,7 +16,7 @@ import xarray as xr
 
 import urmx
 from urmx import fragility as F
-from urmx import fragility_analysis as FA
+from urmx.analysis import ida as FA
 from urmx.catalog import catalog_dir
 from urmx.cli import main
 from urmx.errors import InputError
@@ -276,7 +276,7 @@ def test_the_sa_avg_curve_is_the_pga_curve_scaled_by_the_spectrum_shape(fake_rec
     """NZS 1170.5 scales every ordinate by R: the sa_avg curve's intensity at a return
     period is the spectrum's geometric mean over the periods over its PGA times the PGA
     curve's. The ratio of the two rates is exactly shape x spread over a power law."""
-    from urmx.risk_report import im_comparison, risk_numbers, sa_avg_factor
+    from urmx.reports.ida_risk import im_comparison, risk_numbers, sa_avg_factor
 
     ds = _run(make_study, REP_IDA, "rep.toml", kernel=stiff_kernel)
     f = sa_avg_factor(ds, SPECTRUM)
@@ -302,7 +302,7 @@ def test_the_sa_avg_curve_is_the_pga_curve_scaled_by_the_spectrum_shape(fake_rec
 
 def test_a_report_says_when_its_archive_has_another_kernel():
     from urmx.jitcache import SOURCE_HASH
-    from urmx.reporting import made_from
+    from urmx.reports.common import made_from
 
     same = xr.Dataset(attrs={"urmx_git_commit": "a" * 40, "urmx_git_dirty": 0,
                              "kernel_source_hash": SOURCE_HASH})

@@ -1,7 +1,13 @@
-"""The package's architecture, measured on its source: no import cycle (function-level
-imports included), a kind-blind engine and catalog, a fragility package free of studies,
-dask and xarray, a variable registry that imports nothing of urmx, and no long function in
-the modules of the study engine, the fragility and the reports."""
+"""The package's architecture, measured on its source (one test module for the whole of
+`urmx/`): layers in a declared order with no import from a lower layer up to a higher one
+and no import cycle, counting function-level imports and lazy loads (``importlib`` and a
+module ``__getattr__``); function-level imports of urmx modules only in the command line and
+a short named list; no function over 80 lines but the compiled loop; at most 15 modules
+directly under ``urmx/``; a kind-blind engine and catalog, a fragility package free of
+studies, dask and xarray, a variable registry that imports nothing of urmx; no module
+reaching into another's private names; library code leaving the plotting backend alone;
+``docs/layout.md`` naming every module and folder. Each check is shown to fail on a small
+bad package built in ``tmp_path``."""
 
 from __future__ import annotations
 
@@ -10,8 +16,27 @@ import re
 from pathlib import Path
 
 import urmx
+from urmx.config import project_root
 
 PACKAGE = Path(urmx.__file__).parent
+
+#: the layers, highest first; a module belongs to the first layer one of whose names is it
+#: or a package holding it (the root package, the public face, is its own top layer). A
+#: module may import its own layer and any lower one, never a higher one.
+LAYERS = (
+    ("face", ("urmx",)),
+    ("command line", ("urmx.cli", "urmx.commands")),
+    ("reports", ("urmx.reports",)),
+    ("figures and the paper", ("urmx.plot", "urmx.paper")),
+    ("analysis", ("urmx.analysis",)),
+    ("study", ("urmx.study",)),
+    ("libraries", ("urmx.fragility", "urmx.uncertainty", "urmx.assess", "urmx.guard")),
+    ("kernel, records, catalog, model", ("urmx.kernel", "urmx.native", "urmx.reference",
+                                         "urmx.simulation", "urmx.records", "urmx.catalog",
+                                         "urmx.model")),
+    ("base", ("urmx.errors", "urmx.config", "urmx.variables", "urmx.netcdf", "urmx.markdown",
+              "urmx.jitcache", "urmx.provenance")),
+)
 
 
 def _modules(package: Path) -> dict[str, Path]:
@@ -28,43 +53,88 @@ def _type_checking(node: ast.AST) -> bool:
     return isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
 
 
-def imports(path: Path, name: str) -> set[str]:
-    """Every module `path` (module `name`) imports, at any level (functions included; not
-    under ``if TYPE_CHECKING:``, which never runs): absolute dotted names, a ``from x import
-    y`` giving ``x.y`` when that is a module of the package, else ``x``."""
-    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    skip = {id(n) for node in ast.walk(tree) if _type_checking(node)
-            for n in ast.walk(node)}
-    found = set()
+def _parse(path: Path) -> ast.Module:
+    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
+def _import_nodes(tree: ast.Module):
+    """Every import statement that runs (not under ``if TYPE_CHECKING:``), with whether it
+    sits in a function."""
+    skip = {id(n) for node in ast.walk(tree) if _type_checking(node) for n in ast.walk(node)}
+    late = {id(n) for f in ast.walk(tree)
+            if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef)) for n in ast.walk(f)}
     for node in ast.walk(tree):
-        if id(node) in skip:
-            continue
-        if isinstance(node, ast.Import):
-            found |= {a.name for a in node.names}
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")[:len(package.split(".")) - node.level + 1]
-                source = ".".join(base + ([node.module] if node.module else []))
-            else:
-                source = node.module
-            found.add(source)
-            found |= {f"{source}.{a.name}" for a in node.names}
+        if isinstance(node, (ast.Import, ast.ImportFrom)) and id(node) not in skip:
+            yield node, id(node) in late
+
+
+def _sources(node: ast.AST, name: str, is_package: bool) -> set[str]:
+    """The absolute dotted names one import statement of module `name` loads."""
+    if isinstance(node, ast.Import):
+        return {a.name for a in node.names}
+    package = name if is_package else name.rpartition(".")[0]
+    if node.level:
+        base = package.split(".")[:len(package.split(".")) - node.level + 1]
+        source = ".".join(base + ([node.module] if node.module else []))
+    else:
+        source = node.module
+    return {source} | {f"{source}.{a.name}" for a in node.names}
+
+
+def loads_by_name(tree: ast.Module, modules: set[str]) -> set[str]:
+    """The modules a module loads by name: where it calls ``import_module`` (``importlib``'s,
+    by any spelling) or defines a module ``__getattr__``, every string in it naming a module
+    of the package counts, and an f-string starting ``pkg.sub.`` counts every module under
+    ``pkg.sub``."""
+    calls = any(isinstance(n, ast.Call) and ast.unparse(n.func).endswith("import_module")
+                for n in ast.walk(tree))
+    getattr_ = any(isinstance(n, ast.FunctionDef) and n.name == "__getattr__" for n in tree.body)
+    if not (calls or getattr_):
+        return set()
+    found = set()
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Constant) and isinstance(n.value, str) and n.value in modules:
+            found.add(n.value)
+        elif isinstance(n, ast.JoinedStr) and n.values and isinstance(n.values[0], ast.Constant):
+            prefix = str(n.values[0].value)
+            if prefix.endswith(".") and prefix[:-1] in modules:
+                found |= {m for m in modules if m.startswith(prefix)}
     return found
 
 
+def imports(path: Path, name: str, modules: set[str] | None = None) -> set[str]:
+    """Every module `path` (module `name`) imports, at any level (functions included; not
+    under ``if TYPE_CHECKING:``, which never runs), and the package's modules it loads by
+    name (:func:`loads_by_name`): absolute dotted names, a ``from x import y`` giving
+    ``x.y`` when that is a module of the package, else ``x``."""
+    tree = _parse(path)
+    found = set()
+    for node, _ in _import_nodes(tree):
+        found |= _sources(node, name, path.name == "__init__.py")
+    return found | loads_by_name(tree, modules or set())
+
+
+def late_imports(path: Path, name: str, root: str) -> list[str]:
+    """``module:line -> source`` of every import of a `root` module inside a function."""
+    out = []
+    for node, late in _import_nodes(_parse(path)):
+        sources = _sources(node, name, path.name == "__init__.py")
+        first = sorted(sources)[0]
+        if late and first.split(".")[0] == root:
+            out.append(f"{name}:{node.lineno} -> {first}")
+    return out
+
+
 def import_graph(package: Path) -> dict[str, set[str]]:
-    """Module -> the package's modules it imports. Importing ``a.b.c`` runs the packages
-    ``a`` and ``a.b`` first, so those are edges too, except packages that hold the importer
-    itself (already running when it runs). Attribute loading by name (``importlib``, the
-    lazy public names of ``urmx`` and ``urmx.study``) is not an import: it runs only when
-    the name is first used, never while the modules load."""
+    """Module -> the package's modules it imports or loads by name. Importing ``a.b.c`` runs
+    the packages ``a`` and ``a.b`` first, so those are edges too, except packages that hold
+    the importer itself (already running when it runs)."""
     modules = _modules(package)
     graph = {}
     for name, path in modules.items():
         own = {".".join(name.split(".")[:i]) for i in range(1, name.count(".") + 1)}
         edges = set()
-        for target in imports(path, name) & set(modules):
+        for target in imports(path, name, set(modules)) & set(modules):
             parts = target.split(".")
             edges |= {".".join(parts[:i]) for i in range(1, len(parts) + 1)} - own - {name}
         graph[name] = edges
@@ -104,30 +174,176 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
-def test_the_package_has_no_import_cycle():
+def layer_of(module: str, layers=LAYERS) -> int:
+    """The index of `module`'s layer in `layers` (0 the highest): the first layer naming it
+    or a package holding it, the root package only by its own name."""
+    for i, (_, names) in enumerate(layers):
+        for n in names:
+            if module == n or (module.startswith(n + ".") and "." in n):
+                return i
+    raise KeyError(f"{module} is in no layer: add it to LAYERS")
+
+
+def upward(graph: dict[str, set[str]], layers=LAYERS) -> list[str]:
+    """``importer -> imported`` of every edge from a lower layer up to a higher one."""
+    return sorted(f"{a} -> {b}" for a, edges in graph.items() for b in edges
+                  if layer_of(b, layers) < layer_of(a, layers))
+
+
+def test_layers_no_upward_import_and_no_cycle():
     graph = import_graph(PACKAGE)
-    assert len(graph) > 50 and "urmx.study.kinds.ida" in graph["urmx.study.kinds"]
+    edges = sum(len(e) for e in graph.values())
+    print(f"{len(graph)} modules, {edges} import edges, {len(cycles(graph))} cycles, "
+          f"{len(upward(graph))} upward imports")
+    assert len(graph) > 100 and "urmx.study.kinds.ida" in graph["urmx.study.kinds"]
     assert "urmx.fragility" in graph["urmx.study.kinds.ida"]  # the kind imports fragility
+    assert "urmx.study.engine" in graph["urmx.study"]  # a lazy __getattr__ load is counted
+    assert {"urmx.commands.report", "urmx.commands.aliases"} <= graph["urmx.cli"]  # importlib
     assert cycles(graph) == []
+    assert upward(graph) == []
 
 
-def test_the_cycle_check_fails_on_a_cycle(tmp_path):
-    """A cycle through a function-level import, and one through a parent package that
-    imports the module importing its sibling, are both found."""
+def _bad_package(tmp_path: Path) -> Path:
+    """A small package whose layers are pkg (face) > pkg.top > pkg.low, with one cycle
+    through a function-level import, one through a parent package, and three upward loads
+    from pkg.low: a function-level import, an ``importlib`` load and a module
+    ``__getattr__``."""
     pkg = tmp_path / "pkg"
     (pkg / "sub").mkdir(parents=True)
-    (pkg / "__init__.py").write_text("")
-    (pkg / "a.py").write_text("from . import b\n")
-    (pkg / "b.py").write_text("def f():\n    from .a import g\n")
-    (pkg / "sub" / "__init__.py").write_text("from . import engine\n")
-    (pkg / "sub" / "engine.py").write_text("import pkg.c\n")
-    (pkg / "sub" / "kinds.py").write_text("")
-    (pkg / "c.py").write_text("def f():\n    from .sub import kinds\n")
-    (pkg / "d.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
-                              "    from . import e\n")
-    (pkg / "e.py").write_text("from . import d\n")
-    assert cycles(import_graph(pkg)) == [["pkg.a", "pkg.b"],
-                                         ["pkg.c", "pkg.sub", "pkg.sub.engine"]]
+    (pkg / "low").mkdir()
+    files = {
+        "__init__.py": "", "a.py": "from . import b\n",
+        "b.py": "def f():\n    from .a import g\n",
+        "sub/__init__.py": "from . import engine\n", "sub/engine.py": "import pkg.c\n",
+        "sub/kinds.py": "", "c.py": "def f():\n    from .sub import kinds\n",
+        "d.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import e\n",
+        "e.py": "from . import d\n", "top.py": "from .low import fine\n",
+        "low/__init__.py": "", "low/fine.py": "VALUE = 1\n",
+        "low/late.py": "def f():\n    from .. import top\n",
+        "low/lazy.py": "import importlib\n\ndef f():\n"
+                       "    return importlib.import_module('pkg.top')\n",
+        "low/attr.py": "def __getattr__(name):\n    import importlib\n"
+                       "    return importlib.import_module(f'pkg.{name}')\n",
+    }
+    for name, text in files.items():
+        (pkg / name).write_text(text)
+    return pkg
+
+
+BAD_LAYERS = (("face", ("pkg",)), ("top", ("pkg.top", "pkg.a", "pkg.b", "pkg.c", "pkg.d",
+                                            "pkg.e", "pkg.sub")), ("low", ("pkg.low",)))
+
+
+def test_the_layer_and_cycle_checks_fail_on_a_bad_package(tmp_path):
+    """The cycles and the upward imports of :func:`_bad_package` are all found, the lazy
+    ones too (and a ``TYPE_CHECKING`` import is none)."""
+    graph = import_graph(_bad_package(tmp_path))
+    assert cycles(graph) == [["pkg.a", "pkg.b"], ["pkg.c", "pkg.sub", "pkg.sub.engine"]]
+    found = upward(graph, BAD_LAYERS)
+    assert found[:3] == ["pkg.low.attr -> pkg.a", "pkg.low.attr -> pkg.b",
+                         "pkg.low.attr -> pkg.c"]
+    assert {"pkg.low.late -> pkg.top", "pkg.low.lazy -> pkg.top",
+            "pkg.low.attr -> pkg.top"} <= set(found)
+    assert not [f for f in found if f.startswith(("pkg.top", "pkg.low.fine"))]
+    assert upward(import_graph(PACKAGE)) == []  # while the real package has none
+
+
+#: imports of urmx modules inside a function outside the command line, each with its reason
+#: (``module:imported``); any other belongs at the top of its module
+LATE = {
+    # the root package defines __version__ (and its public names) after its submodules load
+    "urmx.provenance:urmx": "the root package's __version__, defined after its submodules",
+    "urmx.study.dataset:urmx": "the root package's __version__",
+    "urmx.reports.grid:urmx": "the root package's __version__",
+    "urmx.study.clients:urmx": "a worker's identity probe imports urmx where it runs",
+    "urmx.study.clients:urmx.jitcache": "a worker's identity probe imports urmx where it runs",
+    "urmx.study.clients:urmx.provenance": "a worker's identity probe imports urmx where it runs",
+}
+
+
+def _late_outside_the_command_line(package: Path, root: str) -> list[str]:
+    found = []
+    for name, path in _modules(package).items():
+        if name == f"{root}.cli" or name.startswith(f"{root}.commands"):
+            continue
+        found += late_imports(path, name, root)
+    return found
+
+
+def test_function_level_imports_only_in_the_command_line_and_a_named_list():
+    found = _late_outside_the_command_line(PACKAGE, "urmx")
+    in_commands = sum(len(late_imports(p, n, "urmx")) for n, p in _modules(PACKAGE).items()
+                      if n == "urmx.cli" or n.startswith("urmx.commands"))
+    print(f"function-level urmx imports: {in_commands} in the command line, {len(found)} "
+          f"elsewhere ({len(LATE)} named)")
+    keys = {f"{f.split(':')[0]}:{f.split(' -> ')[1]}" for f in found}
+    assert keys - set(LATE) == set(), "import these at the top of the module, or name them"
+    assert set(LATE) <= keys, f"no longer late, drop from LATE: {sorted(set(LATE) - keys)}"
+
+
+def test_the_late_import_check_fails_on_a_late_import(tmp_path):
+    found = _late_outside_the_command_line(_bad_package(tmp_path), "pkg")
+    assert sorted(found) == ["pkg.b:2 -> pkg.a", "pkg.c:2 -> pkg.sub", "pkg.low.late:2 -> pkg"]
+
+
+#: the functions allowed over 80 lines: numba compiles the event loop (kernel._march) and
+#: the event handler it inlines (kernel.handle_event) as one native function whose hot paths
+#: are inlined by hand; split into calls they would cost a call per event
+EXEMPT = {"kernel.py:_march", "kernel.py:handle_event"}
+#: long functions in the sources the kernel's hash covers (`urmx.jitcache.COMPILED_MODULES`):
+#: editing them changes every archive's ``kernel_source_hash``, so that a resumed run
+#: computes its cells again, ``urmx show`` refuses the committed archives and the paper's
+#: report says its archives' kernel is not the current one. They are split (commits
+#: b3fa28d: Wall.in_building, c0e8fa1: native._shim) with the next change of the kernel.
+HASHED = {"model.py:in_building", "native.py:_shim"}
+LONGEST = 80
+
+
+def long_functions(paths: list[Path], limit: int = LONGEST) -> list[str]:
+    """``file:function (lines)`` of every function or method longer than `limit` lines."""
+    out = []
+    for path in paths:
+        for node in ast.walk(_parse(path)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > limit and f"{path.name}:{node.name}" not in EXEMPT:
+                    out.append(f"{path.name}:{node.name} ({n})")
+    return out
+
+
+#: long functions not yet split, each to leave this list when it is (the test fails on a new
+#: one, and on one listed here that is no longer long); none
+NOT_YET: set[str] = set()
+
+
+def test_no_function_longer_than_80_lines_anywhere():
+    paths = sorted(PACKAGE.rglob("*.py"))
+    assert len(paths) > 100
+    found = long_functions(paths)
+    print(f"functions over {LONGEST} lines: {', '.join(found) or 'none'} (exempt: "
+          f"{', '.join(sorted(EXEMPT))})")
+    assert {f.split(" (")[0] for f in found} == NOT_YET | HASHED
+
+
+def test_the_length_check_fails_on_a_long_function(tmp_path):
+    path = tmp_path / "long.py"
+    path.write_text("def short():\n    pass\n\n\ndef long():\n" + "    x = 1\n" * 80)
+    assert long_functions([path]) == ["long.py:long (81)"]
+
+
+def top_modules(package: Path) -> list[str]:
+    """The modules directly under `package` (its ``__init__`` not counted)."""
+    return sorted(p.stem for p in package.glob("*.py") if p.name != "__init__.py")
+
+
+def test_at_most_15_modules_directly_under_urmx(tmp_path):
+    found = top_modules(PACKAGE)
+    print(f"{len(found)} modules directly under urmx/: {', '.join(found)}")
+    assert len(found) <= 15
+    (tmp_path / "many").mkdir()
+    for i in range(16):
+        (tmp_path / "many" / f"m{i}.py").write_text("")
+    assert len(top_modules(tmp_path / "many")) == 16  # the count sees a crowded folder
 
 
 WORDS = re.compile(r"\b(ida|fragility|capacity|capacities)\b", re.I)
@@ -167,43 +383,6 @@ def test_the_variable_registry_imports_no_urmx_module():
     assert "tomllib" in found or "tomli" in found
 
 
-# The measured modules: the study engine and its kinds, the fragility, the catalog, the
-# paper's layer and both reports. The compiled kernel (urmx.kernel) is not among them:
-# kernel._march (the event loop) and kernel.Tables (its arrays) are exempt, since numba
-# compiles _march as one native function whose hot paths are inlined by hand and split
-# into calls would cost a call per event, and Tables declares the arrays that native call
-# is compiled for, one line each.
-MEASURED = ("study", "fragility", "catalog.py", "paper.py", "report.py", "fragility_report.py")
-LONGEST = 80
-
-
-def long_functions(paths: list[Path], limit: int = LONGEST) -> list[str]:
-    """``file:function (lines)`` of every function or method longer than `limit` lines."""
-    out = []
-    for path in paths:
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                n = node.end_lineno - node.lineno + 1
-                if n > limit:
-                    out.append(f"{path.name}:{node.name} ({n})")
-    return out
-
-
-def test_no_function_longer_than_80_lines():
-    paths = []
-    for item in MEASURED:
-        target = PACKAGE / item
-        paths += sorted(target.rglob("*.py")) if target.is_dir() else [target]
-    assert len(paths) >= 20
-    assert long_functions(paths) == []
-
-
-def test_the_length_check_fails_on_a_long_function(tmp_path):
-    path = tmp_path / "long.py"
-    path.write_text("def short():\n    pass\n\n\ndef long():\n" + "    x = 1\n" * 80)
-    assert long_functions([path]) == ["long.py:long (81)"]
-
-
 def test_every_module_says_its_job_first():
     """Each module's docstring opens with a sentence (its job)."""
     missing = []
@@ -212,3 +391,122 @@ def test_every_module_says_its_job_first():
         if not doc or not re.match(r"^[`A-Z\w(].*", doc) or "." not in doc:
             missing.append(name)
     assert missing == []
+
+
+def test_the_engine_imports_no_kernel_and_the_kernel_keeps_the_status_codes():
+    """The study's modules outside its kinds never import the kernel (a kind brings its
+    warm-up and its integrator's record time-step floor); the status vocabulary is the
+    study's (`urmx.study.dataset.STATUS`) and the kernel's codes are its first three."""
+    from urmx import kernel
+    from urmx.study import dataset, kinds
+
+    graph = import_graph(PACKAGE)
+    engine = [n for n in graph if n.startswith("urmx.study") and ".kinds" not in n]
+    assert len(engine) > 10 and "urmx.study.engine" in engine
+    assert {n: sorted(graph[n] & {"urmx.kernel"}) for n in engine
+            if "urmx.kernel" in graph[n]} == {}
+    assert "urmx.kernel" in graph["urmx.study.kinds.grid"]  # the check sees the kinds' import
+    codes = {"ok": kernel.ST_OK, "collapsed": kernel.ST_COLLAPSED,
+             "event-limit": kernel.ST_EVENT_LIMIT}
+    assert {name: dataset.STATUS.index(name) for name in codes} == codes
+    assert kernel.STATUS == dataset.STATUS[:3] and dataset.STATUS[dataset.NOT_RUN] == "not-run"
+    assert kernel.ST_NEED_PIECE not in codes.values() and kernel.ST_NEED_PIECE == 3  # internal
+    for kind in kinds.BUILT_IN:
+        assert kind.warm_up is kernel.warm_up and kind.dt_above == kernel.WINDOW
+
+
+KNOWN: set[str] = set()
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def private_uses(package: Path) -> set[str]:
+    """``"file -> module.name"`` for every private name of one module of `package` that
+    another module imports (``from .x import _name``) or reads (``x._name``,
+    ``pkg.x._name``)."""
+    root = package.parent
+    modules = {}
+    for path in package.rglob("*.py"):
+        parts = list(path.relative_to(root).with_suffix("").parts)
+        modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    found = set()
+    for name, path in modules.items():
+        here = path.relative_to(root).as_posix()
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        package_of = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        aliases = {}  # local name -> module it is bound to
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for a in node.names:
+                    if a.name in modules:
+                        aliases[a.asname or a.name.split(".")[0]] = (
+                            a.name if a.asname else a.name.split(".")[0])
+            elif isinstance(node, ast.ImportFrom):
+                base = package_of.split(".")[:len(package_of.split(".")) - node.level + 1]
+                source = (".".join(base + [node.module] if node.module else base)
+                          if node.level else node.module or "")
+                if source not in modules:
+                    continue
+                for a in node.names:
+                    if f"{source}.{a.name}" in modules:
+                        aliases[a.asname or a.name] = f"{source}.{a.name}"
+                    if _private(a.name) and source != name:
+                        found.add(f"{here} -> {source}.{a.name}")
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and _private(node.attr):
+                chain, value = [], node.value
+                while isinstance(value, ast.Attribute):
+                    chain.append(value.attr)
+                    value = value.value
+                if isinstance(value, ast.Name) and value.id in aliases:
+                    target = ".".join([aliases[value.id], *reversed(chain)])
+                    if target in modules and target != name:
+                        found.add(f"{here} -> {target}.{node.attr}")
+    return found
+
+
+def test_no_module_imports_a_private_name_of_another():
+    found = private_uses(PACKAGE)
+    assert found - KNOWN == set(), "private names used across modules"
+    assert KNOWN <= found, f"no longer used, drop from KNOWN: {sorted(KNOWN - found)}"
+
+
+def test_the_private_name_check_fails_on_a_bad_package(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "core.py").write_text("_cache = {}\ndef _helper(): pass\ndef public(): pass\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "use.py").write_text(
+        "from .. import core as C\nfrom ..core import _helper, public\nimport pkg.core\n"
+        "x = C._cache, pkg.core._helper, C.public, C.__name__\n")
+    (pkg / "ok.py").write_text("from .core import public\n_mine = 1\nprint(_mine)\n")
+    assert private_uses(pkg) == {"pkg/sub/use.py -> pkg.core._helper",
+                                 "pkg/sub/use.py -> pkg.core._cache"}
+
+
+def test_library_code_leaves_the_plotting_backend_alone():
+    for path in PACKAGE.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                names = [a.name for a in node.names] + [getattr(node, "module", None) or ""]
+                assert not any("pyplot" in n for n in names), f"{path}: imports pyplot"
+            if isinstance(node, ast.Attribute) and node.attr == "use":
+                assert ast.unparse(node.value) != "matplotlib", f"{path}: matplotlib.use"
+
+
+def test_the_layout_page_names_every_module_and_folder():
+    layout = (project_root() / "docs" / "layout.md").read_text(encoding="utf-8")
+    names = {p.stem for p in PACKAGE.rglob("*.py") if p.stem != "__init__"}
+    names |= {p.name for p in PACKAGE.rglob("*") if (p / "__init__.py").is_file()}
+    missing = {n for n in names if not re.search(rf"\b{n}\b", layout)}
+    assert not missing, f"docs/layout.md lacks {sorted(missing)}"
+    assert "kinds/__init__.py is the one place kinds are registered" in " ".join(
+        layout.split())
+    folders = {p.name for p in project_root().iterdir()
+               if p.is_dir() and not p.name.startswith(".") and p.name not in
+               ("results", "build", "dist", "scratch") and not p.name.endswith(".egg-info")}
+    assert not {f for f in folders if f"{f}/" not in layout}, "docs/layout.md lacks a folder"

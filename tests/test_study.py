@@ -15,7 +15,8 @@ import xarray as xr
 
 from urmx import study as st
 from urmx import variables
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
+from urmx.study.file import load_study
 
 
 class Interrupt(Exception):

@@ -16,7 +16,9 @@ import pytest
 
 import urmx
 import urmx.catalog as C
-from urmx.catalog import CatalogError, load_catalog, load_study
+import urmx.study.file as F
+from urmx.catalog import CatalogError, load_catalog
+from urmx.study.file import load_study
 from urmx.study.samples import resolve_records
 
 from .fixtures.records import record_file
@@ -486,24 +488,24 @@ def differences(text: str, keys: dict[str, tuple[str, ...]]) -> list[str]:
 
 
 def test_the_reference_describes_exactly_the_loader_s_keys():
-    assert differences(DOCS.read_text(encoding="utf-8"), C.file_keys()) == []
+    assert differences(DOCS.read_text(encoding="utf-8"), F.file_keys()) == []
 
 
 def test_the_reference_check_fails_on_an_undocumented_key(monkeypatch):
     """The check fails when the loader gains a key the reference lacks, or the reference
     describes one the loader does not accept."""
     text = DOCS.read_text(encoding="utf-8")
-    keys = dict(C.file_keys())
+    keys = dict(F.file_keys())
     keys["[records.<id>]"] = (*keys["[records.<id>]"], "encoding")
     assert differences(text, keys) == ["[records.<id>].encoding: accepted by the loader, "
                                        "not described"]
     removed = text.replace("| `tail` |", "| tail |")
-    assert differences(removed, C.file_keys()) == ["[study].tail: accepted by the loader, "
+    assert differences(removed, F.file_keys()) == ["[study].tail: accepted by the loader, "
                                                    "not described"]
     # the loader reads the declaration itself: a key declared is accepted, and only then
-    monkeypatch.setitem(C.STUDY_FILE_KEYS, "[[study.history]]",
+    monkeypatch.setitem(F.STUDY_FILE_KEYS, "[[study.history]]",
                         ("wall", "diaphragm", "record", "cor", "label"))
-    assert differences(text, C.file_keys()) == ["[[study.history]].label: accepted by the "
+    assert differences(text, F.file_keys()) == ["[[study.history]].label: accepted by the "
                                                 "loader, not described"]
 
 
@@ -511,7 +513,7 @@ def test_the_reference_check_fails_on_an_undocumented_key(monkeypatch):
                                    "[[study.history]]", "[walls.<id>]", "[diaphragms.<id>]",
                                    "[records.<id>]"])
 def test_the_loader_refuses_a_key_outside_the_declaration(make_study, table):
-    assert table in C.STUDY_FILE_KEYS
+    assert table in F.STUDY_FILE_KEYS
     tables = {
         "[study]": ('name = "small"', 'name = "small"\nbogus_key = 1'),
         "[study.pairs]": ("cor = [0.8]", "cor = [0.8]\n[study.pairs]\nbogus_key = []"),

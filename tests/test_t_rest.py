@@ -11,10 +11,11 @@ import pytest
 import urmx
 import urmx.study as st
 from urmx import kernel
-from urmx.catalog import CatalogError, load_study
+from urmx.catalog import CatalogError
 from urmx.errors import InputError
 from urmx.study import kinds
 from urmx.study.cells import Cells
+from urmx.study.file import load_study
 from urmx.study.kinds import grid as grid_kind
 
 from .kernel_helpers import SUPPORTS, differences, elcentro

@@ -25,8 +25,8 @@ from pathlib import Path
 from .errors import STOPS as _STOPS  # the Ctrl-C and SIGTERM received while a command runs
 from .errors import Terminated
 
-COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "fragility",
-            "risk", "uncertainty", "assess", "export", "show", "catalog")
+COMMANDS = ("simulate", "records", "study", "report", "info", "bench", "risk", "assess",
+            "export", "show", "catalog", "aliases")
 
 
 class _Version(argparse.Action):

@@ -32,6 +32,8 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+from . import kernel, reference
+from .records.record import as_record
 
 SLOWDOWN, START_SLOWDOWN = 3.0, 2.0  # limits on the kernel's and the start-up slowdown
 MAX_ERROR = 1e-9  # ... and on its relative peak error against the reference
@@ -57,8 +59,6 @@ def load_record(record_id: str, window: float | None = None) -> tuple[np.ndarray
     """(samples [m s-2], dt [s], manifest scale factor) of a manifest record
     (`urmx.records.as_record`: unscaled samples, the scale factor beside them), optionally
     only its first `window` seconds."""
-    from .records.record import as_record
-
     rec = as_record(record_id)
     ag = rec.acceleration
     if window is not None:
@@ -173,8 +173,6 @@ def measure(quick: bool = False) -> dict:
     """The guard's measurement: warm median time [s] of the kernel on the benchmark wall
     under El Centro x 0.5, its max relative peak error against the reference, and the cold
     (compile) and warm (cache load) first analyses of fresh processes."""
-    from . import kernel, reference
-
     wall = benchmark_wall()
     ag, dt, sf = load_record("elcentro", 5.0 if quick else None)
     t0 = time.perf_counter()

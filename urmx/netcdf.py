@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import OutputError
+from .variables import INTEGER_OUTPUTS
 
 if TYPE_CHECKING:  # xarray is not imported here: the fill value is read on workers too
     import xarray as xr
@@ -30,8 +31,6 @@ def encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     as int32 with the CF ``_FillValue`` `INT_FILL`, which xarray masks on reading (float64
     with NaN). A ``chunksizes`` in a variable's own encoding is kept (the slabs a study
     archive is written in, `urmx.study.sources`)."""
-    from .variables import INTEGER_OUTPUTS
-
     enc: dict[str, dict[str, Any]] = {}
     for name, var in ds.variables.items():
         if var.dtype == object:

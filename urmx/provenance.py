@@ -29,6 +29,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from . import jitcache
+
 #: libraries whose versions an archive records, as their distributions are named
 PACKAGES = ("numba", "numpy", "scipy", "xarray", "dask", "distributed", "netCDF4", "obspy")
 #: the entries of :func:`identity` that must be equal for results to be mixed
@@ -168,8 +170,6 @@ def attrs() -> dict[str, Any]:
     commit and whether the package's files differed from it (1/0; ``"none"`` and -1 when
     not run from a git checkout), the kernel source hash, the Python and library
     versions."""
-    from . import jitcache
-
     git = git_commit()
     out: dict[str, Any] = {
         "urmx_version": code_version(),

@@ -158,111 +158,147 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                                         tail, window, t_rest)
     if not (rtol and 0.0 < float(rtol) < 1.0):
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
-    tab = K.tables(wall, dt)
-    P = tab.P
-    GL, GN, GX, GMI, GROT, GNN, GTR = tab.geo
-    nfull = tab.nfull
-    N = ag.size
-    nsteps = N - 1 + ntail
-    g_open = K.G_OPEN_FACTOR * wall.segment(2).theta_a
-    v_rest = g_open / float(t_rest)
     if atol is None:
         atol = rtol * 1e-3 * wall.segment(2).theta_a
-    max_step = dt / 8.0 if max_step is None else float(max_step)
-    rows = np.zeros((K.MAX_EV, K.NP))
-    vrows = np.zeros((K.MAX_EV, K.NP))
-    agc = np.zeros(K.MAX_EV)
-    sig = np.zeros(K.MAX_EV)
-    kap = np.zeros(K.MAX_EV)
-    kind = np.zeros(K.MAX_EV, np.int64)
-    tgt = np.zeros(K.MAX_EV, np.int64)
-    tmp = np.zeros(K.NP)
-    ist = np.zeros(K.N_IST, np.int64)
-    nz = np.flatnonzero(ag)
-    ist[K.I_S] = -1 if (nz.size and ag[nz[0]] > 0) else 1
-    ist[K.I_C] = -ist[K.I_S]
-    ist[K.I_FAM] = 2
-    counts = np.zeros(3, np.int64)
-    peaks = np.zeros(K.N_TRACK)
-    status = K.ST_OK
-    collapse_time = np.nan
-    collapse_segment = 0
-    fam1 = 0.0
-    events = 0
-    log = []
-    hist = np.full((N + ntail if history else 1, 9 + 2 * nfull), np.nan)
+    solver = dict(method=method, rtol=rtol, atol=atol,
+                  max_step=dt / 8.0 if max_step is None else float(max_step))
+    return _Analysis(wall, ag, dt, ntail, history, solver, t_rest=float(t_rest),
+                     cor=float(cor), law=law, window=float(window)).run()
 
-    def piece():
+
+def _tracker_values(mode, TR, r, v, a, b):
+    """(values, rates) of the tracked outputs at state (r, v) under ground acceleration
+    `a` and its rate `b`."""
+    MK, MC, MR, MG = mode
+    acc = -MK @ r - MC @ v - MR - MG * a
+    jerk = -MK @ v - MC @ acc - MG * b
+    val = np.concatenate([TR[:K.N_DISP] @ r, TR[K.N_DISP:] @ acc + a])
+    der = np.concatenate([TR[:K.N_DISP] @ v, TR[K.N_DISP:] @ jerk + b])
+    return val, der
+
+
+class _Analysis:
+    """One analysis in progress: the wall's piece tables, the state (``r``, ``v``) of the
+    current piece, its event rows, the counts, peaks and history as they grow, and how it
+    ends (``status``)."""
+
+    def __init__(self, wall, ag, dt, ntail, history, solver, *, t_rest, cor, law, window):
+        self.tab = tab = K.tables(wall, dt)
+        self.GL, self.GN, self.GX, self.GMI, self.GROT, self.GNN, self.GTR = tab.geo
+        self.ag, self.dt, self.N, self.history, self.solver = ag, dt, ag.size, history, solver
+        self.nsteps = self.N - 1 + ntail
+        self.g_open = K.G_OPEN_FACTOR * wall.segment(2).theta_a
+        self.v_rest = self.g_open / t_rest
+        self.cor, self.law, self.window = cor, law, window
+        self.rows = np.zeros((K.MAX_EV, K.NP))
+        self.vrows = np.zeros((K.MAX_EV, K.NP))
+        self.agc = np.zeros(K.MAX_EV)
+        self.sig = np.zeros(K.MAX_EV)
+        self.kap = np.zeros(K.MAX_EV)
+        self.kind = np.zeros(K.MAX_EV, np.int64)
+        self.tgt = np.zeros(K.MAX_EV, np.int64)
+        self.tmp = np.zeros(K.NP)
+        self.ist = ist = np.zeros(K.N_IST, np.int64)
+        nz = np.flatnonzero(ag)
+        ist[K.I_S] = -1 if (nz.size and ag[nz[0]] > 0) else 1
+        ist[K.I_C] = -ist[K.I_S]
+        ist[K.I_FAM] = 2
+        self.counts = np.zeros(3, np.int64)
+        self.peaks = np.zeros(K.N_TRACK)
+        self.status, self.collapse_time, self.collapse_segment = K.ST_OK, np.nan, 0
+        self.fam1, self.events, self.log = 0.0, 0, []
+        self.span, self.ev_here = -1, 0  # the event bound: events in one K.EVENT_SPAN
+        self.hist = np.full((self.N + ntail if history else 1, 9 + 2 * tab.nfull), np.nan)
+
+    def piece(self):
         """(n, mid, mode over y, padded mode, tracker rows, watch rows) of the piece."""
+        tab, ist = self.tab, self.ist
         h = int(ist[K.I_H])
         mid = K.piece_index(h, ist[K.I_FAM], ist[K.I_BL], ist[K.I_BU], ist[K.I_BLA])
         if not tab.ready[mid]:
             tab.build([K.piece_key(mid)])
-        n = int(GNN[h])
+        n = int(self.GNN[h])
         padded = (tab.mats[mid, 0], tab.mats[mid, 1], tab.vecs[mid, 0], tab.vecs[mid, 1])
         mode = (padded[0][:n, :n], padded[1][:n, :n], padded[2][:n], padded[3][:n])
-        return n, mid, mode, padded, GTR[h, ist[K.I_FAM] - 1][:, :n], GL[h]
+        return n, mid, mode, padded, self.GTR[h, ist[K.I_FAM] - 1][:, :n], self.GL[h]
 
-    def tracker_values(mode, TR, r, v, a, b):
+    def bump(self, val):
+        np.maximum(self.peaks, np.abs(val), out=self.peaks)
+
+    def record(self, k, a):
+        """Row `k` of the history: the state now under ground acceleration `a`."""
+        n, mid, mode, padded, TR, L = self.piece()
+        val, _ = _tracker_values(mode, TR, self.r, self.v, a, 0.0)
+        K.record_row_py(self.hist, k, L, self.GN[self.ist[K.I_H]], self.ist, _pad(self.r),
+                        _pad(self.v), val, self.tab.nfull)
+
+    def active(self, L, mid):
+        """The number of events active in the piece (their rows filled in)."""
+        return K.active_events_py(self.tab.P, L, self.tab.rel[mid], self.ist, self.g_open,
+                                  self.rows, self.vrows, self.agc, self.sig, self.kap,
+                                  self.kind, self.tgt)
+
+    def event_values(self, ne, n, r, v, a, b, mode):
         MK, MC, MR, MG = mode
         acc = -MK @ r - MC @ v - MR - MG * a
-        jerk = -MK @ v - MC @ acc - MG * b
-        val = np.concatenate([TR[:K.N_DISP] @ r, TR[K.N_DISP:] @ acc + a])
-        der = np.concatenate([TR[:K.N_DISP] @ v, TR[K.N_DISP:] @ jerk + b])
-        return val, der
-
-    def bump(val):
-        np.maximum(peaks, np.abs(val), out=peaks)
-
-    def record(k, r, v, a):
-        n, mid, mode, padded, TR, L = piece()
-        val, _ = tracker_values(mode, TR, r, v, a, 0.0)
-        K.record_row_py(hist, k, L, GN[ist[K.I_H]], ist, _pad(r), _pad(v), val, nfull)
-
-    def event_values(ne, n, r, v, a, b, mode):
-        MK, MC, MR, MG = mode
-        acc = -MK @ r - MC @ v - MR - MG * a
-        e = sig[:ne] * (rows[:ne, :n] @ r + vrows[:ne, :n] @ v + agc[:ne] * a) + kap[:ne]
+        rows, vrows, agc, sig = self.rows, self.vrows, self.agc, self.sig
+        e = sig[:ne] * (rows[:ne, :n] @ r + vrows[:ne, :n] @ v + agc[:ne] * a) + self.kap[:ne]
         ed = sig[:ne] * (rows[:ne, :n] @ v + vrows[:ne, :n] @ acc + agc[:ne] * b)
         return e, ed
 
-    n, mid, mode, padded, TR, L = piece()
-    r = np.zeros(n)
-    v = np.zeros(n)
-    b0 = (ag[1] - ag[0]) / dt
-    val, _ = tracker_values(mode, TR, r, v, ag[0], b0)
-    bump(val)
-    if history:
-        record(0, r, v, ag[0])
-    duration = nsteps * dt
-    span, ev_here = -1, 0  # the event bound: events in one span of K.EVENT_SPAN seconds
-    for step in range(nsteps):
-        alpha, beta = (ag[step], (ag[step + 1] - ag[step]) / dt) if step < N - 1 else (0., 0.)
+    def run(self) -> dict:
+        ag, dt = self.ag, self.dt
+        n, mid, mode, padded, TR, L = self.piece()
+        self.r, self.v = np.zeros(n), np.zeros(n)
+        val, _ = _tracker_values(mode, TR, self.r, self.v, ag[0], (ag[1] - ag[0]) / dt)
+        self.bump(val)
+        if self.history:
+            self.record(0, ag[0])
+        duration = self.nsteps * dt
+        for step in range(self.nsteps):
+            tau = self.step(step)
+            if self.status != K.ST_OK:
+                duration = step * dt + tau
+                break
+            if step == self.N - 2:
+                n, mid, mode, padded, TR, L = self.piece()
+                val, _ = _tracker_values(mode, TR, self.r, self.v, 0.0, 0.0)
+                np.maximum(self.peaks[K.N_DISP:], np.abs(val[K.N_DISP:]),
+                           out=self.peaks[K.N_DISP:])
+            if self.history:
+                self.record(step + 1, ag[step + 1] if step + 1 < self.N else 0.0)
+        return self.result(duration)
+
+    def step(self, step: int) -> float:
+        """Integrate record step `step` piece by piece, each event met handled; returns how
+        far into the step the analysis got (dt, unless it stopped). [s]"""
+        ag, dt = self.ag, self.dt
+        alpha, beta = ((ag[step], (ag[step + 1] - ag[step]) / dt) if step < self.N - 1
+                       else (0., 0.))
         t0 = step * dt
         tau = 0.0
-        while tau < dt and status == K.ST_OK:
-            n, mid, mode, padded, TR, L = piece()
+        while tau < dt and self.status == K.ST_OK:
+            n, mid, mode, padded, TR, L = self.piece()
             MK, MC, MR, MG = mode
-            ne = K.active_events_py(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig, kap,
-                                 kind, tgt)
+            ne = self.active(L, mid)
             rhs = _rhs(MK, MC, MR, MG, alpha, beta, n)
-            x0 = np.concatenate([r, v])
+            x0 = np.concatenate([self.r, self.v])
             if n == 0:  # nothing moves (both joints held): events follow the ground alone
                 x0 = np.zeros(1)
 
                 def rhs(t, x):
                     return np.zeros(1)
-            sol = solve_ivp(rhs, (tau, dt), x0, method=method, rtol=rtol, atol=atol,
-                            max_step=max_step, dense_output=True)
-            ev = (rows[:ne, :n], vrows[:ne, :n], agc[:ne], sig[:ne], kap[:ne])
+            sol = solve_ivp(rhs, (tau, dt), x0, dense_output=True, **self.solver)
+            ev = (self.rows[:ne, :n], self.vrows[:ne, :n], self.agc[:ne], self.sig[:ne],
+                  self.kap[:ne])
             at = partial(_at, sol=sol, n=n, mode=mode, TR=TR, ev=ev, alpha=alpha, beta=beta)
             t_s = _samples(sol.t, tau)
             X = sol.sol(t_s)
             E, val, der = at(t_s, X=X)
-            e0, ed0 = event_values(ne, n, r, v, alpha + beta * tau, beta, mode)
+            e0, ed0 = self.event_values(ne, n, self.r, self.v, alpha + beta * tau, beta, mode)
             z = _noise(t_s, X, sol, n, ev, alpha, beta)
-            te, k_ev = _first_event(t_s, E, z, e0, ed0, at,
-                                    lambda a, b: K.release_tie_py(ist, kind, tgt, a, b))
+            te, k_ev = _first_event(t_s, E, z, e0, ed0, at, lambda a, b: K.release_tie_py(
+                self.ist, self.kind, self.tgt, a, b))
             # interior extrema of the outputs up to the end of this piece
             if te is not None:
                 keep = t_s < te
@@ -270,80 +306,82 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
                 t_s = np.append(t_s[keep], te)
                 val = np.concatenate([val[:, keep], v_e], axis=1)
                 der = np.concatenate([der[:, keep], d_e], axis=1)
-            _extrema(t_s, val, der, peaks, at)
+            _extrema(t_s, val, der, self.peaks, at)
             if te is None:
-                r, v = sol.y[:n, -1].copy(), sol.y[n:2 * n, -1].copy()
-                if ist[K.I_FAM] == 1:
-                    fam1 += dt - tau
+                self.r, self.v = sol.y[:n, -1].copy(), sol.y[n:2 * n, -1].copy()
+                if self.ist[K.I_FAM] == 1:
+                    self.fam1 += dt - tau
                 tau = dt
-                val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
-                bump(val)
+                val, _ = _tracker_values(mode, TR, self.r, self.v, alpha + beta * tau, beta)
+                self.bump(val)
                 break
             # step to the event (an interpolated state is less accurate)
             if te > tau and n:
-                s2 = solve_ivp(rhs, (tau, te), x0, method=method, rtol=rtol, atol=atol,
-                               max_step=max_step)
-                r, v = s2.y[:n, -1].copy(), s2.y[n:2 * n, -1].copy()
-            if ist[K.I_FAM] == 1:
-                fam1 += te - tau
+                s2 = solve_ivp(rhs, (tau, te), x0, **self.solver)
+                self.r, self.v = s2.y[:n, -1].copy(), s2.y[n:2 * n, -1].copy()
+            if self.ist[K.I_FAM] == 1:
+                self.fam1 += te - tau
             tau = te
-            val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
-            bump(val)
-            while k_ev >= 0:
-                log.append((t0 + tau, kind[k_ev], tgt[k_ev]))
-                events += 1
-                sp = int(np.floor((t0 + tau) / K.EVENT_SPAN))
-                if sp != span:
-                    span, ev_here = sp, 0
-                ev_here += 1
-                if ev_here > K.MAX_EVENTS:
-                    status = K.ST_EVENT_LIMIT
-                    break
-                rp, vp = _pad(r), _pad(v)
-                code = K.handle_event_py(P, GL, GX, GMI, GROT, ist, kind[k_ev], tgt[k_ev], rp, vp,
-                                      float(cor), law, float(window), alpha + beta * tau,
-                                      *padded, v_rest, counts, tmp)
-                log[-1] = (*log[-1], ist[K.I_FAM] * 10 + (1 if ist[K.I_S] > 0 else 2))
-                if code:
-                    collapse_segment = code
-                    status = K.ST_COLLAPSED
-                    collapse_time = t0 + tau
-                    break
-                n, mid, mode, padded, TR, L = piece()
-                r, v = rp[:n].copy(), vp[:n].copy()
-                val, _ = tracker_values(mode, TR, r, v, alpha + beta * tau, beta)
-                bump(val)
-                ne = K.active_events_py(P, L, tab.rel[mid], ist, g_open, rows, vrows, agc, sig,
-                                     kap, kind, tgt)
-                e, ed = event_values(ne, n, r, v, alpha + beta * tau, beta, mode)
-                release = (kind[:ne] == K.EV_BASE_RELEASE) | (kind[:ne] == K.EV_CRACK_RELEASE)
-                now = np.flatnonzero(np.where(release, (e < 0.0) | ((e == 0.0) & (ed < 0.0)),
-                                              (e <= 0.0) & (ed < 0.0)))
-                k_ev = int(now[0]) if now.size else -1
-                for k in now[1:]:  # both sides of a held joint: the current family's
-                    if K.release_tie_py(ist, kind, tgt, k_ev, int(k)):
-                        k_ev = int(k)
-        if status != K.ST_OK:
-            duration = t0 + tau
-            break
-        if step == N - 2:
-            n, mid, mode, padded, TR, L = piece()
-            val, _ = tracker_values(mode, TR, r, v, 0.0, 0.0)
-            np.maximum(peaks[K.N_DISP:], np.abs(val[K.N_DISP:]), out=peaks[K.N_DISP:])
-        if history:
-            record(step + 1, r, v, ag[step + 1] if step + 1 < N else 0.0)
-    outs = np.zeros(K.N_OUT)
-    outs[K.O_COLLAPSE_SEG] = collapse_segment
-    outs[K.O_COLLAPSE_T] = collapse_time
-    outs[K.O_FAM1_TIME] = fam1
-    outs[K.O_DURATION] = duration
-    outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP], outs[K.O_HOLDS] = counts
-    outs[K.O_EVENTS] = events
-    res = K.scalars(peaks, outs, status, P)
-    if history:
-        res["history"] = K.history_dict(hist, dt, nfull)
-    res["event_log"] = np.array([row + (0,) * (4 - len(row)) for row in log]).reshape(-1, 4)
-    return res
+            val, _ = _tracker_values(mode, TR, self.r, self.v, alpha + beta * tau, beta)
+            self.bump(val)
+            self.handle(k_ev, t0 + tau, alpha + beta * tau, beta, padded)
+        return tau
+
+    def handle(self, k_ev: int, t: float, a: float, b: float, padded) -> None:
+        """The event `k_ev` at time `t` (ground acceleration `a`, its rate `b`) and any
+        event it makes due at once, until none is, the event bound is passed or the wall
+        collapses."""
+        ist, kind, tgt = self.ist, self.kind, self.tgt
+        while k_ev >= 0:
+            self.log.append((t, kind[k_ev], tgt[k_ev]))
+            self.events += 1
+            sp = int(np.floor(t / K.EVENT_SPAN))
+            if sp != self.span:
+                self.span, self.ev_here = sp, 0
+            self.ev_here += 1
+            if self.ev_here > K.MAX_EVENTS:
+                self.status = K.ST_EVENT_LIMIT
+                break
+            rp, vp = _pad(self.r), _pad(self.v)
+            code = K.handle_event_py(self.tab.P, self.GL, self.GX, self.GMI, self.GROT, ist,
+                                     kind[k_ev], tgt[k_ev], rp, vp, self.cor, self.law,
+                                     self.window, a, *padded, self.v_rest, self.counts,
+                                     self.tmp)
+            self.log[-1] = (*self.log[-1], ist[K.I_FAM] * 10 + (1 if ist[K.I_S] > 0 else 2))
+            if code:
+                self.collapse_segment = code
+                self.status = K.ST_COLLAPSED
+                self.collapse_time = t
+                break
+            n, mid, mode, padded, TR, L = self.piece()
+            self.r, self.v = rp[:n].copy(), vp[:n].copy()
+            val, _ = _tracker_values(mode, TR, self.r, self.v, a, b)
+            self.bump(val)
+            ne = self.active(L, mid)
+            e, ed = self.event_values(ne, n, self.r, self.v, a, b, mode)
+            release = (kind[:ne] == K.EV_BASE_RELEASE) | (kind[:ne] == K.EV_CRACK_RELEASE)
+            now = np.flatnonzero(np.where(release, (e < 0.0) | ((e == 0.0) & (ed < 0.0)),
+                                          (e <= 0.0) & (ed < 0.0)))
+            k_ev = int(now[0]) if now.size else -1
+            for k in now[1:]:  # both sides of a held joint: the current family's
+                if K.release_tie_py(ist, kind, tgt, k_ev, int(k)):
+                    k_ev = int(k)
+
+    def result(self, duration: float) -> dict:
+        """The kernel's outputs (`urmx.kernel.scalars`), the history and the event log."""
+        outs = np.zeros(K.N_OUT)
+        outs[K.O_COLLAPSE_SEG] = self.collapse_segment
+        outs[K.O_COLLAPSE_T] = self.collapse_time
+        outs[K.O_FAM1_TIME] = self.fam1
+        outs[K.O_DURATION] = duration
+        outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP], outs[K.O_HOLDS] = self.counts
+        outs[K.O_EVENTS] = self.events
+        res = K.scalars(self.peaks, outs, self.status, self.tab.P)
+        if self.history:
+            res["history"] = K.history_dict(self.hist, self.dt, self.tab.nfull)
+        res["event_log"] = np.array([row + (0,) * (4 - len(row))
+                                     for row in self.log]).reshape(-1, 4)
+        return res
 
 
 def _pad(x):

@@ -12,6 +12,7 @@ costs about 0.2 ms, a large share of one analysis.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from typing import Any
@@ -19,9 +20,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import __version__, provenance, variables
-from .errors import InputError
+from . import __version__, provenance, reference, variables
+from .errors import InputError, numbers_argument
+from .kernel import check_inputs, run
 from .model import T_REST, Wall
+from .records.record import load_named
 
 METHODS = ("exact", "reference")
 DEFAULT_RTOL = 1e-10  # relative tolerance of the reference method
@@ -36,8 +39,6 @@ def load_record(record: str | os.PathLike, records_dir: str | os.PathLike | None
     reading of a record's name). Raises :class:`urmx.errors.MissingFileError` naming
     `record` when it is neither an existing file nor a manifest id.
     """
-    from .records.record import load_named
-
     return load_named(record, records_dir)
 
 
@@ -47,8 +48,6 @@ def _record(ground_acceleration: Any, dt: float | None) -> tuple[Any, float | No
         ground_acceleration = load_record(ground_acceleration)
     stats = getattr(ground_acceleration, "stats", None)
     if stats is None or not hasattr(ground_acceleration, "data"):
-        from .errors import numbers_argument
-
         ground_acceleration = numbers_argument("simulate", "ground_acceleration",
                                                ground_acceleration)
         if dt is None:
@@ -129,8 +128,26 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
     urmx.records.RecordError, urmx.errors.MissingFileError
         A record named by a string cannot be read or found.
     """
-    from .kernel import check_inputs
+    _check_options(method, rtol, scale=scale, cor=cor, tail=tail, dt=dt)
+    samples, dt, source = _record(ground_acceleration, dt)
+    try:
+        check_inputs(wall, samples, dt, scale, cor, impact, tail, t_rest=t_rest)
+    except ValueError as exc:  # the solvers' own argument checks
+        raise InputError(str(exc)) from None
+    t_rest = float(t_rest)
+    rtol = DEFAULT_RTOL if method == "reference" and rtol is None else rtol
+    solve = run if method == "exact" else functools.partial(reference.run, rtol=rtol)
+    res = solve(wall, samples, dt, scale=scale, cor=cor, impact=impact, tail=tail,
+                t_rest=t_rest, history=history)
+    ds = _dataset(res, samples, scale, history)
+    ds.attrs = _attrs(wall, res, method=method, rtol=rtol, dt=float(dt), scale=scale,
+                      cor=cor, impact=impact, tail=tail, t_rest=t_rest, source=source)
+    return variables.stamp(ds)
 
+
+def _check_options(method: str, rtol: float | None, **numbers: Any) -> None:
+    """Refuse an unknown method, a tolerance the method does not take or outside (0, 1),
+    and any of `numbers` (scale, cor, tail, dt) given but not a number."""
     if method not in METHODS:
         raise InputError(f"method={method!r} is not a method; use 'exact' or 'reference'")
     if method == "exact" and rtol is not None:
@@ -138,29 +155,16 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
                          "tolerance")
     if rtol is not None and not (isinstance(rtol, (int, float)) and 0.0 < rtol < 1.0):
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
-    for name, value in (("scale", scale), ("cor", cor), ("tail", tail), ("dt", dt)):
+    for name, value in numbers.items():
         if value is not None and (isinstance(value, bool) or not isinstance(
                 value, (int, float, np.integer, np.floating))):
             raise InputError(f"simulate: {name}={value!r} must be a number, not "
                              f"{type(value).__name__}")
-    samples, dt, source = _record(ground_acceleration, dt)
-    try:
-        check_inputs(wall, samples, dt, scale, cor, impact, tail, t_rest=t_rest)
-    except ValueError as exc:  # the solvers' own argument checks
-        raise InputError(str(exc)) from None
-    t_rest = float(t_rest)
-    options = dict(scale=scale, cor=cor, impact=impact, tail=tail, t_rest=t_rest,
-                   history=history)
-    if method == "exact":
-        from .kernel import run
 
-        res = run(wall, samples, dt, **options)
-    else:
-        from .reference import run
 
-        rtol = DEFAULT_RTOL if rtol is None else rtol
-        res = run(wall, samples, dt, rtol=rtol, **options)
-
+def _dataset(res: dict, samples: Any, scale: float, history: bool) -> xr.Dataset:
+    """The run's scalars as 0-d variables and, with `history`, its time histories and the
+    analysed (scaled, zero in the tail) ground acceleration over ``time``."""
     data: dict[str, Any] = {}
     for name in variables.SCALARS:
         dtype = np.int32 if name in variables.INTEGER_SCALARS else np.float64
@@ -175,10 +179,7 @@ def simulate(wall: Wall, ground_acceleration: Any, dt: float | None = None, *,
         record = np.asarray(samples, dtype=float) * float(scale)
         ag[:record.size] = record
         data["ground_acceleration"] = ("time", ag)
-    ds = xr.Dataset(data, coords=coords)
-    ds.attrs = _attrs(wall, res, method=method, rtol=rtol, dt=float(dt), scale=scale,
-                      cor=cor, impact=impact, tail=tail, t_rest=t_rest, source=source)
-    return variables.stamp(ds)
+    return xr.Dataset(data, coords=coords)
 
 
 def _attrs(wall: Wall, res: dict, *, method: str, rtol: float | None, dt: float,

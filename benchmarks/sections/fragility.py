@@ -212,7 +212,7 @@ def _plain(w, rec, unit: float, ida) -> tuple[float, int]:
 def run(quick: bool, echo=print) -> dict:
     """Measure the section (``quick``: a 36-cell study and 2 x 4 brute-force cells, to check
     the machinery; not the acceptance numbers)."""
-    from urmx.catalog import load_study
+    from urmx.study.file import load_study
 
     full = load_study(STUDY)
     data = {"load_start": _load()}

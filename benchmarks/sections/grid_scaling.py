@@ -22,8 +22,9 @@ TARGET_GRID_RATE = 1500.0  # synthetic 100,000-analysis grid, 2 local workers
 def synthetic_study(n_cor: int, n_scale: int, duration: float = 5.0, dt: float = 0.01):
     """(Study, records) of a synthetic grid: the catalog's parametric walls x diaphragms
     D1-D5 (single storey) x the synthetic record x `n_cor` CORs x `n_scale` scale factors."""
-    from urmx.catalog import Study, load_catalog
+    from urmx.catalog import load_catalog
     from urmx.records import Record
+    from urmx.study.file import Study
 
     cat = load_catalog()
     acc = synthetic_record(duration, dt)

@@ -119,7 +119,8 @@ def walls() -> dict:
     """The compared walls, on their own supports: the benchmark wall of
     ``catalog/examples`` and the parametric wall of slenderness 12 on diaphragm D1 as the
     FEMA P695 study builds it (both a rigid floor under a flexible timber roof)."""
-    from urmx.catalog import catalog_dir, load_study, read_wall
+    from urmx.catalog import catalog_dir, read_wall
+    from urmx.study.file import load_study
 
     study = load_study("fema-p695-ida")
     cat = study.catalog

@@ -21,7 +21,8 @@ MAX_PGA = 5.0 * 9.80665  # stop the ladder beyond 5 g [m s-2]
 
 def cells() -> list[tuple[str, str, object]]:
     """(wall id, diaphragm label, urmx.Wall) of every catalog cell."""
-    from urmx.catalog import load_catalog, load_study
+    from urmx.catalog import load_catalog
+    from urmx.study.file import load_study
 
     cat = load_catalog()
     study = load_study("fema-p695-ida")

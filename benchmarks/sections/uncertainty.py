@@ -34,7 +34,7 @@ def _load() -> list[float]:
 
 
 def _quick_study(tmp: Path) -> Path:
-    from urmx.catalog import study_path
+    from urmx.study.file import study_path
 
     text = study_path(STUDY).read_text(encoding="utf-8")
     start, end = text.index("records = ["), text.index("]\ncor =") + 2
@@ -102,7 +102,7 @@ def run_sampling(quick: bool, quick_study, study_file: Path, archive: Path, unit
     """Time a sampling study (`time_study`): the catalog's `study_file` into `archive`, or
     with ``quick`` the study `quick_study(tmp)` writes into a temporary folder; `then(data,
     out)` adds to the data while the archive `out` still exists."""
-    from urmx.catalog import load_study
+    from urmx.study.file import load_study
 
     with tempfile.TemporaryDirectory() as tmp:
         if quick:

@@ -5,7 +5,7 @@ the cluster's start, the run, the workers' CPU time and the load).
 
 Not part of ``all`` (minutes on 2 cores); ask for it by name: ``urmx bench wall_population``
 (``--quick``: 32 walls x 4 records). The full run writes ``results/wall-population.nc``,
-from which ``python -m urmx.predictors_report results/wall-population.nc`` writes
+from which ``python -m urmx.reports.predictors results/wall-population.nc`` writes
 ``reports/predictors/``. A run made with ``urmx run`` instead is recorded with
 :func:`record` from its archive and the CPU time ``/usr/bin/time`` measured.
 """
@@ -26,7 +26,7 @@ TARGET_MINUTES = 60.0  # issue 37: "well under an hour" on 2 cores [min]
 
 
 def _quick_study(tmp: Path) -> Path:
-    from urmx.catalog import study_path
+    from urmx.study.file import study_path
 
     text = study_path(STUDY).read_text(encoding="utf-8")
     start, end = text.index("records = ["), text.index("]\ncor =") + 2

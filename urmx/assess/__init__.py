@@ -85,8 +85,7 @@ register("ntc_kinematic", ntc_kinematic)
 register("doherty", doherty)
 register("urmx_rule", urmx_rule)  # urmx's own rule (issue 37, urmx.assess.urmx_rule)
 
-from .compare import compare  # noqa: E402 (iterates the registry above)
 
 __all__ = ["PROCEDURES", "Assessment", "DesignSpectrum", "NotApplicable", "Position", "Quantity",
-           "RecordDemand", "asce41_ht", "compare", "doherty", "ntc_kinematic", "nzsee_c8",
+           "RecordDemand", "asce41_ht", "doherty", "ntc_kinematic", "nzsee_c8",
            "position_of", "record_demand", "register", "urmx_rule"]

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ..fragility.predictors import wall_predictors
+from ..fragility.predictors import PREDICTORS, wall_predictors
 from ..model import Wall
 from .demand import position_of
 from .result import Assessment, NotApplicable, Quantity, linear_capacity_scale, verdict
@@ -149,6 +149,4 @@ def urmx_rule(wall: Wall, demand, position=None, **options) -> Assessment:
 
 
 def _unit(name: str) -> str:
-    from ..fragility.predictors import PREDICTORS
-
     return PREDICTORS[name][0] if name in PREDICTORS else "1"

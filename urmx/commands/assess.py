@@ -1,6 +1,6 @@
 """``urmx assess WALL.toml`` (each assessment procedure's verdict for one wall) and
 ``urmx assess-report FILE.nc`` (the procedures against an IDA archive -> reports/assessment/):
-thin commands over `urmx.assess` and `urmx.assessment_report`."""
+thin commands over `urmx.assess` and `urmx.reports.assessment`."""
 
 from __future__ import annotations
 
@@ -91,8 +91,8 @@ def _assess(args) -> int:
 
 
 def _report(args) -> int:
-    from ..assessment_report import write_report
     from ..errors import check_output, writing
+    from ..reports.assessment import write_report
 
     check_output(args.out, "--out", folder=True)
     with writing(args.out, "report folder"):

@@ -230,7 +230,7 @@ def _run(args) -> int:
                                                        if args.channel else ""))
         print(f"wrote {args.out}")
         return 0
-    from urmx.records.report import write_report
+    from urmx.reports.records import write_report
 
     if args.out is not None:
         from urmx.records import manifest

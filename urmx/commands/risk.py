@@ -47,10 +47,10 @@ def register(sub) -> None:
 def _risk(args) -> int:
     from pathlib import Path
 
+    from ..analysis.ida import first_cor
     from ..errors import InputError
-    from ..fragility_analysis import first_cor
-    from ..fragility_report import open_ida
-    from ..risk_report import risk_lines, risk_numbers
+    from ..reports.ida import open_ida
+    from ..reports.ida_risk import risk_lines, risk_numbers
 
     if args.archive is None:
         return _one_fragility(args)
@@ -59,7 +59,7 @@ def _risk(args) -> int:
     ds = open_ida(args.archive)
     r = risk_numbers(ds, args.hazard, args.spectrum, args.years, site=args.site)
     if r is None:
-        from ..fragility_analysis import require_measures
+        from ..analysis.ida import require_measures
 
         require_measures(ds)  # raises: the archive lacks the measures
     print(f"# Collapse risk: {ds.attrs.get('study_name', Path(args.archive).name)} over "

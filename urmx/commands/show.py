@@ -41,8 +41,8 @@ def register(sub) -> None:
 
 
 def _show(args) -> int:
+    from ..analysis.recompute import compare, compared, not_run, recompute
     from ..errors import InputError, check_output
-    from ..recompute import compare, compared, not_run, recompute
 
     for option, path in (("--out", args.out), ("--plot", args.plot)):
         if path:

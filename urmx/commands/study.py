@@ -162,40 +162,22 @@ def run_loaded(args, study) -> int:
 
 
 def _paper(args) -> int:
-    from ..config import records_dir
     from ..errors import check_output, writing
-    from ..paper import STUDIES
-    from ..report import write_report
-    from ..study import check_scheduler, close_client, get_client, run_study
-    from ..study.clients import stop_now
+    from ..paper import run_paper
+    from ..reports.paper import write_report
+    from ..study import check_scheduler
 
     out = check_output(args.out, "--out", folder=True)
     check_output(args.report, "--report", folder=True)
     check_scheduler(args.scheduler)
     apply_settings(args)
-    records_dir(args.records)  # a missing records folder is said before a cluster starts
     start = time.perf_counter()
-    archives = []
-    client, owned = (None, False)
-    if args.scheduler != "serial":
-        client, owned = get_client(args.scheduler)  # one cluster for all the studies
-    try:
-        for name in STUDIES:
-            path = out / f"{name}.nc"
-            print(f"urmx paper: {name} -> {path}", file=sys.stderr)
-            run_resumable(args, path, lambda name=name, path=path: run_study(
-                name, out=path, scheduler=client if client else "serial",
-                progress=not args.quiet, batch_size=args.batch_size,
-                records_dir=args.records, command=command_line(), **size_arguments(args)))
-            archives.append(path)
-    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
-        if owned:
-            owned = False
-            stop_now(client)
-        raise
-    finally:
-        if owned:
-            close_client(client)
+    archives = run_paper(
+        out, scheduler=args.scheduler,
+        wrap=lambda path, run: run_resumable(args, path, run),
+        say=lambda what: print(f"urmx paper: {what}", file=sys.stderr),
+        progress=not args.quiet, batch_size=args.batch_size, records_dir=args.records,
+        command=command_line(), **size_arguments(args))
     print(f"urmx paper: studies done in {time.perf_counter() - start:.1f} s", file=sys.stderr)
     with writing(args.report, "report folder"):
         report = write_report(archives, args.report)

@@ -23,7 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernel import run as kernel
+from ..kernel import warm_up as warm_kernel
 from ..model import Wall
+from ..records.measures import dominant_frequency
 from ..records.record import Record, as_record
 from .capacity import (
     DEFAULT_IM,
@@ -95,10 +98,6 @@ def warm_up() -> None:
     """Run every compiled function a collapse-capacity batch uses once (the kernel, the
     response and Fourier spectra), so numba compiles them or loads them from its on-disk
     cache now; ``client.run(warm_up)`` does it on every dask worker before timing."""
-    from ..kernel import run as kernel
-    from ..kernel import warm_up as warm_kernel
-    from ..records.measures import dominant_frequency
-
     warm_kernel()
     wall = Wall(0.23, 3.68, 2 / 3, 20000.0, top_mass=12000.0, top_stiffness=815e3,
                 top_damping=0.12)

@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..kernel import run as run_kernel
 from ..model import Wall
 from ..records.readers import check_finite
 from ..records.record import as_record
@@ -249,8 +250,7 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
     step by `urmx.kernel.run`), so only the first analysis of a wall builds them.
     """
     check_im(im)
-    if kernel is None:
-        from ..kernel import run as kernel
+    kernel = kernel or run_kernel
     if not isinstance(wall, Wall):
         raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
     rtol = _positive("rtol", rtol)

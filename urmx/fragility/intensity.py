@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .. import variables
-from ..errors import InputError
+from ..errors import InputError, numbers_argument
 from ..model import PAPER_G, Wall
 from ..records.measures import (
     SA_AVG_PERIODS,
@@ -43,7 +43,7 @@ from ..records.measures import (
 )
 from ..records.readers import check_finite
 from ..records.record import as_record
-from .mechanism import diaphragm_period, rocking_period
+from .mechanism import diaphragm_period, rocking_period, wall_argument
 
 IMS = variables.intensity_measures()  # pga, pgv, sa_wall, sa_diaphragm, sa_avg, scale
 #: units and long name of each intensity measure (from the registry)
@@ -87,8 +87,6 @@ def sa_avg_range(wall: Wall) -> tuple[float, float]:
     wall : urmx.Wall
         The wall and its supports.
     """
-    from .mechanism import wall_argument
-
     wall_argument("sa_avg_range", wall)
     tr, td = rocking_period(wall), diaphragm_period(wall)
     return (max(min(td, tr) / SA_AVG_WIDEN, SA_AVG_FLOOR * tr), SA_AVG_WIDEN * max(td, tr))
@@ -164,8 +162,6 @@ def record_intensities(acceleration, dt: float, im: str, walls,
     period_range : (float, float), optional
         Periods of ``sa_avg`` instead of each wall's default range. [s]
     """
-    from ..errors import numbers_argument
-
     acc = numbers_argument("record_intensities", "acceleration", acceleration)
     if im == "scale":
         return np.ones(len(walls))
@@ -196,8 +192,6 @@ def record_measures(acceleration, dt: float, walls, period_range=None) -> dict[s
     period_range : (float, float), optional
         Periods of ``sa_avg`` instead of each wall's default range. [s]
     """
-    from ..errors import numbers_argument
-
     acc = numbers_argument("record_measures", "acceleration", acceleration)
     avg = np.array([sa_avg_periods(w, period_range) for w in walls]).reshape(len(walls), -1)
     own = np.array([[rocking_period(w), diaphragm_period(w)] for w in walls]).reshape(-1, 2)

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import math
 
-from ..model import RIGID, Wall
+from ..errors import InputError, got
+from ..model import RIGID, Wall, system
 
 DESIGN_FRACTION = 0.6  # effective period at this fraction of the instability rotation
 
@@ -24,8 +25,6 @@ DESIGN_FRACTION = 0.6  # effective period at this fraction of the instability ro
 def wall_argument(function: str, wall: object) -> None:
     """Refuse a `wall` that is not a `urmx.Wall`, naming the function and what it got."""
     if not isinstance(wall, Wall):
-        from ..errors import InputError, got
-
         raise InputError(f"{function}: wall must be a urmx.Wall, got {got(wall)}")
 
 
@@ -55,8 +54,6 @@ def pinned_mechanism(wall: Wall):
     """(inertia, ground coupling, resistance(theta1), instability theta1, the pinned wall) of
     the wall with both supports pinned: one coordinate theta1, theta2 = -(a1/a2) theta1,
     family 2."""
-    from ..model import system
-
     pinned = wall.replace(bottom_stiffness=RIGID, top_stiffness=RIGID, bottom_damping=0.0,
                           top_damping=0.0)
     M, _, _, _, MinvG, _ = system(pinned.params, 2, 0, 0)

@@ -61,7 +61,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, MissingFileError
+from ..errors import InputError, MissingFileError, got, path_argument
 from ..records.readers import STANDARD_GRAVITY
 from .intensity import IM_ATTRS, RECORD_IMS
 
@@ -236,8 +236,6 @@ def read_hazard(path: str | os.PathLike, site: int = 0) -> HazardCurve:
         A header without measure or units, an unknown measure or units, a row that is not
         two numbers, intensities that do not rise or rates that do not fall.
     """
-    from ..errors import path_argument
-
     path_argument("read_hazard", "path", path)
     path = Path(path)
     try:
@@ -385,8 +383,6 @@ def collapse_rate(fit, hazard, years: float = YEARS) -> CollapseRisk:
         deaggregation ``bands`` and ``extrapolated_share`` [1] (`deaggregate`).
     """
     if not (hasattr(fit, "median") and hasattr(fit, "dispersion")):
-        from ..errors import got
-
         raise InputError(f"collapse_rate: fit must be a fragility with median and dispersion "
                          f"(urmx.fragility.fit_lognormal), got {got(fit)}")
     try:
@@ -515,8 +511,6 @@ def read_spectrum(path: str | os.PathLike) -> DesignSpectrum:
         A bad header, a row that is not two numbers, periods that do not rise, a Sa that is
         not positive.
     """
-    from ..errors import path_argument
-
     path_argument("read_spectrum", "path", path)
     path = Path(path)
     header, rows = _read_rows(path, "design spectrum")

@@ -31,6 +31,16 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+from ..errors import path_argument
+from .errors import RecordError
+from .readers import (
+    UNIT_FACTORS,
+    describe_all,
+    detect_format,
+    read_file,
+    same_channel,
+    stated_by_format,
+)
 
 #: the manifest file: records/manifest.toml of the source checkout, or the copy an
 #: installed wheel carries (`urmx.config.data_dir`)
@@ -103,8 +113,6 @@ def _validate(src: Path, k: int, entry: dict) -> None:
     """Every value of a manifest entry checked where it is read: a one-line
     `ManifestError` naming the file, the record and the key (a scale factor of 0, -0.5 or
     nan is never used)."""
-    from .readers import UNIT_FACTORS
-
     rid = entry.get("id", "?")
 
     def bad(key, what):
@@ -276,9 +284,6 @@ def load_samples(record_id: str, records_dir: str | os.PathLike | None = None, *
     manifest : str or path-like, optional
         Another manifest file, read alone.
     """
-    from .errors import RecordError
-    from .readers import read_file, same_channel, stated_by_format
-
     if not isinstance(record_id, str):
         raise InputError(f"load: record_id must be a manifest record id (str), got "
                          f"{record_id!r} ({type(record_id).__name__})")
@@ -374,10 +379,7 @@ def index(folder: str | os.PathLike, *, pattern: str = "*", dt: float | None = N
         A file that cannot be read (names it; with ``skip_unknown`` only for files of a
         known format).
     """
-    from ..errors import path_argument
-
     path_argument("index", "folder", folder)
-    from .readers import describe_all, detect_format, stated_by_format
 
     folder = Path(folder)
     if not folder.is_dir():
@@ -386,6 +388,22 @@ def index(folder: str | os.PathLike, *, pattern: str = "*", dt: float | None = N
                    and not p.name.startswith(".") and p.name != FOLDER_MANIFEST)
     if not files:
         raise InputError(f"no file in {str(folder)!r} matches {pattern!r}")
+    found, skipped = _described(folder, files, dt, unit, allow_unusual, skip_unknown)
+    taken = set(manifest(path=MANIFEST)) if MANIFEST.is_file() else set()
+    ids = _unique_ids([record_id(f.stem) + (f"-{record_id(rf.channel)}" if multi else "")
+                       for f, rf, multi in found],
+                      [record_id(f.name) + (f"-{record_id(rf.channel)}" if multi else "")
+                       for f, rf, multi in found], taken, record_id(record_set))
+    return [_entry(ident, f.relative_to(folder).as_posix(), rf, multi, record_set,
+                   allow_unusual) for ident, (f, rf, multi) in zip(ids, found, strict=True)], \
+        skipped
+
+
+def _described(folder: Path, files: list[Path], dt: float | None, unit: str | None,
+               allow_unusual: bool, skip_unknown: bool) -> tuple[list[tuple], list[str]]:
+    """([(file, its described channel, whether the file has several)], the files left out
+    with why) of :func:`index`: each file read once, with the `dt` and `unit` its format
+    does not state."""
     found, skipped = [], []
     for f in files:
         try:
@@ -401,26 +419,23 @@ def index(folder: str | os.PathLike, *, pattern: str = "*", dt: float | None = N
                            unit=None if "unit" in states else unit,
                            allow_unusual=allow_unusual)
         found.extend((f, rf, len(rfs) > 1) for rf in rfs)
-    taken = set(manifest(path=MANIFEST)) if MANIFEST.is_file() else set()
-    ids = _unique_ids([record_id(f.stem) + (f"-{record_id(rf.channel)}" if multi else "")
-                       for f, rf, multi in found],
-                      [record_id(f.name) + (f"-{record_id(rf.channel)}" if multi else "")
-                       for f, rf, multi in found], taken, record_id(record_set))
-    entries = []
-    for ident, (f, rf, multi) in zip(ids, found, strict=True):
-        rel = f.relative_to(folder).as_posix()
-        e = dict(id=ident, set=record_set, event=rf.description or f.name,
-                 station=rf.station, component=rf.channel)
-        if multi:
-            e["channel"] = rf.channel
-        e.update(source=f"{rel} (urmx records index)", file=rel, format=rf.format, dt=rf.dt,
-                 unit=rf.unit, npts=rf.npts, sha256=rf.sha256,
-                 expected_pga_g=float(f"{rf.pga_g:.6g}"), scale_factor=1.0,
-                 notes="; ".join(rf.processing[1:]) or "read as it is")
-        if allow_unusual:
-            e["allow_unusual"] = True
-        entries.append(e)
-    return entries, skipped
+    return found, skipped
+
+
+def _entry(ident: str, rel: str, rf, multi: bool, record_set: str,
+           allow_unusual: bool) -> dict:
+    """The manifest entry of one described channel (file `rel` of the indexed folder)."""
+    e = dict(id=ident, set=record_set, event=rf.description or Path(rel).name,
+             station=rf.station, component=rf.channel)
+    if multi:
+        e["channel"] = rf.channel
+    e.update(source=f"{rel} (urmx records index)", file=rel, format=rf.format, dt=rf.dt,
+             unit=rf.unit, npts=rf.npts, sha256=rf.sha256,
+             expected_pga_g=float(f"{rf.pga_g:.6g}"), scale_factor=1.0,
+             notes="; ".join(rf.processing[1:]) or "read as it is")
+    if allow_unusual:
+        e["allow_unusual"] = True
+    return e
 
 
 def _unique_ids(short: list[str], long: list[str], taken: set[str], prefix: str) -> list[str]:
@@ -464,8 +479,6 @@ def write_manifest(entries: list[dict], path: str | os.PathLike, comment: str = 
     comment : str
         Text written as ``#`` lines on top.
     """
-    from ..errors import path_argument
-
     path_argument("write_manifest", "path", path)
     path = Path(path)
     lines = [f"# {ln}".rstrip() for ln in comment.splitlines()]

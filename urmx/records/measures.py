@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, got, numbers_argument
 from ..jitcache import jit
 from ..variables import attrs, stamp
 from .readers import STANDARD_GRAVITY, check_finite
@@ -48,8 +48,6 @@ def _series(trace):
     """(acceleration, dt) of a trace: a positive time step [s] and finite samples, or an
     error naming the trace (and the first NaN sample's index)."""
     if not (hasattr(trace, "stats") and hasattr(trace, "data")):
-        from ..errors import got
-
         raise InputError(f"trace must be an obspy Trace (urmx.records.read, load), got "
                          f"{got(trace)}")
     dt = float(trace.stats.delta)
@@ -342,8 +340,6 @@ def sdof_displacement(acc, dt: float, period: float, damping: float = 0.05) -> n
     damping : float
         Ratio of critical damping. [1]
     """
-    from ..errors import numbers_argument
-
     damping = _check_damping(damping)
     p = numbers_argument("sdof_displacement", "acc", acc)
     dt, period = (float(numbers_argument("sdof_displacement", n, v))

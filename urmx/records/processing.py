@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, got
 from .readers import STANDARD_GRAVITY, check_finite
 
 
@@ -18,7 +18,6 @@ def _trace(trace):
     argument and what it got."""
     if hasattr(trace, "stats") and hasattr(trace, "data") and hasattr(trace, "copy"):
         return trace
-    from ..errors import InputError, got
 
     raise InputError(f"trace must be an obspy Trace (urmx.records.read, load), got "
                      f"{got(trace)}")

@@ -37,7 +37,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config import UrmxWarning
-from ..errors import MissingFileError
+from ..errors import MissingFileError, numbers_argument, path_argument
+from .checks import counts_problem, motion_problem, quantity_problems, unit_problem
 from .errors import (
     ChannelError,
     MissingTimeStepError,
@@ -196,7 +197,6 @@ def read(path: str | os.PathLike, format: str | None = None, dt: float | None = 
     """
     from obspy import Stream
 
-    from ..errors import path_argument
 
     path_argument("read", "path", path)
     return Stream([c.trace() for c in read_file(path, format, dt, unit, channel,
@@ -209,8 +209,6 @@ def read_samples(path: str | os.PathLike, format: str | None = None, dt: float |
     """:func:`read` without ObsPy: the checked channels as :class:`Samples` (data in m s-2,
     dt, header fields, provenance). Same arguments, checks and errors as :func:`read`;
     only ObsPy's own formats import ObsPy."""
-    from ..errors import path_argument
-
     path_argument("read_samples", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual).samples
 
@@ -240,8 +238,6 @@ def read_channel(path: str | os.PathLike, format: str | None = None, dt: float |
     response : str or path-like, optional
         A StationXML file whose instrument response is removed (as :func:`read`).
     """
-    from ..errors import path_argument
-
     path_argument("read_channel", "path", path)
     return read_file(path, format, dt, unit, channel, allow_unusual, one=True,
                      response=response).samples[0]
@@ -349,8 +345,6 @@ def describe(path: str | os.PathLike, *, channel: str | None = None, dt: float |
     RecordError, urmx.errors.MissingFileError
         As :func:`read`.
     """
-    from ..errors import path_argument
-
     path_argument("describe", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, channel, allow_unusual,
                                      one=True, response=response))[0]
@@ -374,8 +368,6 @@ def describe_all(path: str | os.PathLike, *, dt: float | None = None, unit: str 
     allow_unusual : bool
         Read a record outside the plausible time steps, peaks and sizes (as :func:`read`).
     """
-    from ..errors import path_argument
-
     path_argument("describe_all", "path", path)
     return _record_files(path, read_file(path, format, dt, unit, None, allow_unusual))
 
@@ -430,8 +422,6 @@ def detect_format(path: str | os.PathLike, *, allow_unusual: bool = False) -> st
     UnusualRecordError
         A file larger than `MAX_RECORD_BYTES` that is none of urmx's text formats.
     """
-    from ..errors import path_argument
-
     path_argument("detect_format", "path", path)
     return _sniff(Path(path), allow_unusual)[0]
 
@@ -1404,7 +1394,6 @@ def _parse_obspy(path: Path, format: str | None, raw: bytes,
     acceleration [m s-2]."""
     import obspy
 
-    from .checks import counts_problem, quantity_problems
 
     if format is None or format.upper() not in OBSPY_FORMATS:  # never auto-detect
         raise UnknownFormatError(path, f"ObsPy format {format!r} is not one urmx reads")
@@ -1588,8 +1577,6 @@ def _plausible(path: Path, label: str, ch: _Channel, values: np.ndarray, data: n
     stated unit against its values (`urmx.records.checks`); each problem refuses the
     record, or with ``allow_unusual`` becomes an ``overrode`` processing step (returned).
     `how`: (unit of the values, where it comes from, where the time step comes from)."""
-    from .checks import motion_problem, unit_problem
-
     file_unit, src, dt_source = how
     out = []
     lo, hi = DT_RANGE
@@ -1647,8 +1634,6 @@ def check_finite(data, label: str = "record", dt: float | None = None,
     path : str or path-like, optional
         The file they came from, for the message.
     """
-    from ..errors import numbers_argument
-
     values = numbers_argument(label, "samples", data)
     bad = ~np.isfinite(values)
     if bad.any():

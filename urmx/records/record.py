@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import records as library  # its names looked up when called (tests serve fakes)
 from ..errors import InputError, MissingFileError
 
 
@@ -174,26 +175,23 @@ def load_named(name: str | os.PathLike, records_dir: str | os.PathLike | None = 
     urmx.errors.InputError
         The file holds more than one channel.
     """
-    from . import manifest, read
-
     path = Path(name)
     if path.is_file():
-        stream = read(path)
+        stream = library.read(path)
         if len(stream) != 1:
             ids = ", ".join(tr.id for tr in stream)
             raise InputError(f"record file {str(name)!r} holds {len(stream)} channels "
                              f"({ids}); give a file with one channel")
         return stream[0]
-    from . import load
 
     try:
-        known = manifest(records_dir)
+        known = library.manifest(records_dir)
     except MissingFileError:
         known = {}
     if str(name) not in known:
         raise MissingFileError(f"record {str(name)!r} is neither a file nor a manifest "
                                "record id (see `urmx records list`)")
-    return load(str(name), records_dir)
+    return library.load(str(name), records_dir)
 
 
 def _pair(acc: Any, dt: Any) -> Record:

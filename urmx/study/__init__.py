@@ -1,9 +1,10 @@
 """Studies: a study file -> batches on dask -> one labelled Dataset -> a netCDF archive, for
 every study kind; this package's public names, each loaded from its module on first use.
 
-A study (`urmx.catalog.load_study`) is a grid over ``wall``, ``diaphragm``, ``record``,
-``cor`` and any of ``scale``, ``impact``, ``damping``; its kind (`urmx.study.kinds`, the one
-place kinds are registered) says what each cell computes: the default time-history grid
+A study (`urmx.study.file.load_study`: a study file read and checked) is a grid over
+``wall``, ``diaphragm``, ``record``, ``cor`` and any of ``scale``, ``impact``, ``damping``;
+its kind (`urmx.study.kinds`, the one place kinds are registered) says what each cell
+computes: the default time-history grid
 (`urmx.study.kinds.grid`: one analysis per cell) or the kind a ``[study.<kind>]`` table
 names. The kind-blind engine runs them all:
 
@@ -30,8 +31,8 @@ names. The kind-blind engine runs them all:
 - `urmx.study.samples`: :func:`resolve_records`, a study's records (manifest ids and the
   study file's own record files) as `urmx.records.Record`, with their provenance.
 
-The names are loaded on first use so that `urmx.catalog` can reach the kinds (to parse a
-study's ``[study.<kind>]`` table) without importing the engine, which imports the catalog.
+The names are loaded on first use, so that importing one module of the package (a kind on
+a worker) does not import the engine.
 """
 
 from __future__ import annotations
@@ -56,8 +57,9 @@ _PUBLIC = {
     "resolve_records": "samples", "RecordData": "samples",
     "to_dataframe": "table",
     "run_batch": "kinds.grid", "BATCH_OUTPUTS": "kinds.grid",
+    "load_study": "file", "study_path": "file", "Study": "file",
 }
-_SUBMODULES = ("engine", "limits", "cells", "batches", "parts", "sources", "clients",
+_SUBMODULES = ("file", "engine", "limits", "cells", "batches", "parts", "sources", "clients",
                "progress", "dataset", "archive", "samples", "kinds", "summary", "table")
 __all__ = sorted(_PUBLIC)
 

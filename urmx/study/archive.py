@@ -14,6 +14,27 @@ from ..errors import InputError, MissingFileError
 from . import kinds
 
 
+def open_archive(archive, what: str = "study archive") -> xr.Dataset:
+    """A Dataset loaded from a study archive path (`urmx.open_study`), or as given.
+
+    Raises
+    ------
+    urmx.errors.MissingFileError
+        No such file (``no <what> 'path'``).
+    urmx.errors.InputError
+        A file that is not a readable netCDF archive.
+    """
+    if isinstance(archive, xr.Dataset):
+        return archive
+    path = Path(archive)
+    if not path.is_file():
+        raise MissingFileError(f"no {what} {str(path)!r}")
+    try:
+        return open_study(path).load()
+    except (OSError, ValueError) as exc:  # not netCDF, or damaged
+        raise InputError(f"{str(path)!r} is not a readable {what}: {exc}") from None
+
+
 def open_study(path: str | os.PathLike, chunks: Any = None, keys: bool = False) -> xr.Dataset:
     """Reopen a study archive lazily (dask arrays; ``chunks`` as for `xarray.open_dataset`,
     default the archive's own chunks).

@@ -36,7 +36,10 @@ from typing import Any
 
 import numpy as np
 
+from .. import jitcache
 from ..model import T_REST
+from ..provenance import release
+from .parts import kernel_name
 
 _C1, _C2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
 _S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
@@ -112,10 +115,6 @@ class Cells:
     """
 
     def __init__(self, study: Any, kind: Any, records: dict, kernel: Callable | None = None):
-        from .. import jitcache
-        from ..provenance import release
-        from .parts import kernel_name
-
         self.study, self.kind = study, kind
         self.dims = kind.cell_dims(study)
         self.names = list(self.dims)

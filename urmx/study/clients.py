@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import provenance
 from ..errors import InputError, RunError
 
 _ADDRESS = re.compile(r"^[a-z][a-z0-9+.-]*://\S+$")
@@ -114,17 +115,21 @@ def refuse_in_worker_import() -> None:
                          f"script: {UNGUARDED}")
 
 
-def local_client(n_workers: int | None = None, threads: bool = False):
+def local_client(n_workers: int | None = None, threads: bool = False,
+                 warm_up: Callable[[], None] | None = None):
     """A ``distributed.Client`` on a new local cluster.
 
     Parameters
     ----------
     n_workers : int, optional
         Worker processes of one thread each (default: one per core). The kernel holds
-        the GIL, so processes beat threads; the kernel is compiled (or loaded from the
-        cache) here first, so the workers load its native code from the cache.
+        the GIL, so processes beat threads.
     threads : bool
         One worker in this process with `n_workers` threads instead.
+    warm_up : callable, optional
+        Called before the worker processes start: a study kind's ``warm_up`` compiles its
+        integrator (or loads it from the cache) here first, so the workers load its native
+        code from the cache.
 
     Returns
     -------
@@ -134,10 +139,8 @@ def local_client(n_workers: int | None = None, threads: bool = False):
     from distributed import Client, LocalCluster
 
     n = n_workers or os.cpu_count() or 1
-    if not threads:
-        from ..kernel import warm_up
-
-        warm_up()
+    if not threads and warm_up is not None:
+        warm_up()  # compiled once here: the worker processes load it from the cache
     # Ctrl-C in a terminal reaches the whole process group. SIGINT is blocked while the
     # cluster starts: the worker processes (and those restarted later, spawned from the
     # cluster's thread) inherit the blocked signal, so only this process handles it; a
@@ -197,7 +200,25 @@ def _usable(client: Any) -> Any:
     return client
 
 
-def get_client(scheduler: Any) -> tuple[Any, bool]:
+@contextlib.contextmanager
+def owning(client: Any, owned: bool):
+    """Hold `client` (as :func:`get_client` gives it) for a run or several: one urmx
+    started (`owned`) is stopped within bounds on Ctrl-C or SIGTERM (:func:`stop_now`),
+    else closed when the runs end; any other is left as it is."""
+    try:
+        yield client
+    except KeyboardInterrupt:
+        if owned:
+            owned = False
+            stop_now(client)
+        raise
+    finally:
+        if owned:
+            close_client(client)
+
+
+def get_client(scheduler: Any, warm_up: Callable[[], None] | None = None
+               ) -> tuple[Any, bool]:
     """(client, owned) for a `scheduler` argument of `urmx.run_study`: a Client is used as
     it is, and so is the active client for None (owned False); None (without an active
     client) or "processes" start local worker processes, "threads" a threaded local
@@ -208,6 +229,9 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
     ----------
     scheduler : None, str or distributed.Client
         As `urmx.run_study` takes it (but ``"serial"``, which needs no client).
+    warm_up : callable, optional
+        A study kind's warm-up (loads or compiles its integrator), called before the worker
+        processes of a local cluster start (they load it from the cache).
 
     Raises
     ------
@@ -227,7 +251,7 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
                              "distributed.Client")
         return _usable(scheduler), False
     if scheduler in (None, "processes", "threads"):
-        return local_client(threads=scheduler == "threads"), True
+        return local_client(threads=scheduler == "threads", warm_up=warm_up), True
     previous = logging.root.manager.disable
     logging.disable(logging.CRITICAL)  # a refused connection is said once, below
     try:
@@ -298,11 +322,10 @@ def _identity_probe():
 
 def mismatch(worker: str, theirs: dict, when: str) -> RunError:
     """The error for a worker that runs other code than this process."""
-    from ..provenance import describe, identity
-
-    return RunError(f"worker {worker} runs other code than this process ({describe(theirs)} "
-                    f"there; {describe(identity())} here): {when}; give workers the same "
-                    "urmx and numpy")
+    here = provenance.describe(provenance.identity())
+    return RunError(f"worker {worker} runs other code than this process "
+                    f"({provenance.describe(theirs)} there; {here} here): {when}; give workers "
+                    "the same urmx and numpy")
 
 
 def check_workers(client: Any, timeout: float) -> int:
@@ -315,8 +338,6 @@ def check_workers(client: Any, timeout: float) -> int:
         No worker within `timeout`, a worker with other code (named, with both
         identities), or a scheduler that cannot be asked.
     """
-    from ..provenance import differs
-
     address = scheduler_address(client)
     try:
         client.wait_for_workers(1, timeout=timeout)
@@ -335,7 +356,7 @@ def check_workers(client: Any, timeout: float) -> int:
             continue
         if isinstance(theirs, BaseException):
             theirs = {"urmx": f"unknown ({type(theirs).__name__}: {theirs})"}
-        if differs(theirs):
+        if provenance.differs(theirs):
             raise mismatch(worker, theirs, "nothing was computed")
     return len(answers)
 
@@ -344,15 +365,14 @@ def run_stamped(runner: Callable[[dict, np.ndarray], dict], task: dict,
                 acceleration: np.ndarray) -> dict[str, Any]:
     """Run one batch on a worker (`runner`, a kind's ``run``) and return its result with
     the identity of the code that computed it and the worker's address."""
-    from ..provenance import identity
-
     try:
         from distributed import get_worker
 
         where = get_worker().address
     except (ImportError, ValueError):
         where = "this process"
-    return {"result": runner(task, acceleration), "identity": identity(), "worker": where}
+    return {"result": runner(task, acceleration), "identity": provenance.identity(),
+            "worker": where}
 
 
 # ---- a cluster that dies -------------------------------------------------------------------

@@ -15,14 +15,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import variables
-from ..kernel import STATUS as _KERNEL_STATUS
+from ..provenance import attrs
+from ..records.record import PROVENANCE
 
 if TYPE_CHECKING:
     import xarray as xr
 
-#: an analysis' status, as the kernel reports it, and a cell no analysis ran for; the flag
-#: values 0, 1, 2, 3 of a grid's ``status`` variable
-STATUS = (*_KERNEL_STATUS, "not-run")
+#: an analysis' status (ok, collapsed, event-limit: the codes 0, 1, 2 the kernel reports,
+#: `urmx.kernel.STATUS`, held to these by tests/test_structure.py) and a cell no analysis ran
+#: for; the flag values 0, 1, 2, 3 of a grid's ``status`` variable
+STATUS = ("ok", "collapsed", "event-limit", "not-run")
 NOT_RUN = STATUS.index("not-run")
 VALID = (STATUS.index("ok"), STATUS.index("collapsed"))  # statuses whose outputs are kept
 MISSING = ("NaN where the cell was not run or its status is not ok/collapsed (event-limit: "
@@ -79,8 +81,6 @@ def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any
         The command that ran it; None: ``urmx.run_study(NAME)``.
     """
     from .. import __version__
-    from ..provenance import attrs
-
     cmd = command or f"urmx.run_study({study.name!r})"
     return {
         "title": study.title or study.name,
@@ -178,8 +178,6 @@ def _record_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
     """The record dimension: ids, peaks, scale factors, time steps, and where each record
     comes from (`urmx.records.record.PROVENANCE`: file, SHA-256, format, channel, unit,
     source, processing, points; empty strings for records given in memory)."""
-    from ..records.record import PROVENANCE
-
     recs = [records[r] for r in study.records]
     coords = {
         "record": coord("record", "record", np.array(study.dims["record"], dtype=object)),

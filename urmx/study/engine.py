@@ -75,11 +75,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..catalog import Study, load_study
-from ..errors import InputError, OutputError, RunError, check_output, got, stop_if_asked
+from .. import netcdf, variables
+from .. import records as rec
+from ..errors import InputError, OutputError, RunError, UrmxError, check_output, got, stop_if_asked
 from ..netcdf import write_netcdf
 from ..provenance import differs
 from . import kinds
+from .archive import open_study
 from .batches import Batch, Cut
 from .cells import Cells
 from .clients import (
@@ -90,17 +92,18 @@ from .clients import (
     fetch_all,
     get_client,
     mismatch,
+    owning,
     quiet_client,
     record_samples,
     refuse_in_worker_import,
     release,
     run_stamped,
     setting,
-    stop_now,
     worker_timeout,
 )
 from .dataset import global_attrs
 from .definition import Definition, base, compare
+from .file import Study, load_study
 from .limits import MAX_CELLS, MAX_GB, check_size
 from .parts import Lock, PartStore, batch_key
 from .progress import Progress
@@ -184,9 +187,11 @@ def batch_tasks(study: Study, records: dict, batch_size: int = 16,
 
 def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
             scheduler: Any, on_result: Callable[[Batch, dict], None],
-            runner: Callable[[dict, np.ndarray], dict]) -> None:
-    """Run the batches (each through `runner`, a kind's ``run``) and hand each result to
-    `on_result` as it arrives.
+            runner: Callable[[dict, np.ndarray], dict],
+            warm_up: Callable[[], None] | None = None) -> None:
+    """Run the batches (each through `runner`, a kind's ``run``; `warm_up`, its kind's,
+    loads the integrator before a batch is timed or a cluster starts) and hand each result
+    to `on_result` as it arrives.
 
     ``scheduler=None`` uses the ``distributed.Client`` already active in this process when
     there is one; else a study small enough runs in this process (:func:`_in_process`),
@@ -216,44 +221,39 @@ def compute(tasks: list[tuple[Batch, dict]], records: dict, rec_ids: list[str],
         Called with each batch and its result as it arrives.
     runner : callable
         The kind's ``run(task, acceleration)``.
+    warm_up : callable, optional
+        The kind's warm-up (loads or compiles its integrator), called before a batch is
+        timed here and before the worker processes of a local cluster start.
     """
     _compute_all(iter(tasks), sum(b.size for b, _ in tasks), records, rec_ids, scheduler,
-                 on_result, runner)
+                 on_result, runner, warm_up)
 
 
 def _compute_all(batches: Iterator, total: int, records: dict, rec_ids: list[str],
-                 scheduler: Any, on_result: Callable, runner: Callable) -> None:
+                 scheduler: Any, on_result: Callable, runner: Callable,
+                 warm_up: Callable[[], None] | None = None) -> None:
     """:func:`compute` over batches made as they are needed (`total`: their cells)."""
     check_scheduler(scheduler)
     if scheduler == "serial":
         _here(batches, records, rec_ids, on_result, runner)
         return
     if scheduler is None and active_client() is None:
-        batches = _in_process(batches, total, records, rec_ids, on_result, runner)
+        batches = _in_process(batches, total, records, rec_ids, on_result, runner, warm_up)
     first = list(itertools.islice(batches, 1))
     if not first:
         return
-    client, owned = _client(scheduler)
-    with quiet_client():
-        try:
-            watch = Watch(client, worker_timeout())
-            check_workers(client, watch.timeout)
-            for chunk in _windows(itertools.chain(first, batches), _window(client, first)):
-                pending: dict = {}
-                try:
-                    _submit(client, chunk, records, rec_ids, runner, pending)
-                    _gather(pending, on_result, watch)
-                finally:
-                    if pending and not owned:
-                        release(client, False, [f for f, _ in pending.values()])
-        except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the cluster stopped within bounds
-            if owned:
-                owned = False
-                stop_now(client)
-            raise
-        finally:
-            if owned:
-                release(client, True, [])
+    client, owned = _client(scheduler, warm_up)
+    with quiet_client(), owning(client, owned):  # Ctrl-C: the cluster stopped within bounds
+        watch = Watch(client, worker_timeout())
+        check_workers(client, watch.timeout)
+        for chunk in _windows(itertools.chain(first, batches), _window(client, first)):
+            pending: dict = {}
+            try:
+                _submit(client, chunk, records, rec_ids, runner, pending)
+                _gather(pending, on_result, watch)
+            finally:
+                if pending and not owned:
+                    release(client, False, [f for f, _ in pending.values()])
 
 
 def _here(tasks: Iterable, records: dict, rec_ids: list[str], on_result: Callable,
@@ -272,7 +272,8 @@ def serial_estimate(seconds: float, size: int, total: int) -> float:
 
 
 def _in_process(tasks: Iterator, total: int, records: dict, rec_ids: list[str],
-                on_result: Callable, runner: Callable) -> Iterator:
+                on_result: Callable, runner: Callable,
+                warm_up: Callable[[], None] | None = None) -> Iterator:
     """Run a small study in this process and return the batches left for a cluster.
 
     The rule: a study of one batch runs here. Otherwise the kernel is loaded and the
@@ -284,9 +285,8 @@ def _in_process(tasks: Iterator, total: int, records: dict, rec_ids: list[str],
     first = list(itertools.islice(tasks, 2))
     if len(first) <= 1:
         return _here(first, records, rec_ids, on_result, runner)
-    from ..kernel import warm_up
-
-    warm_up()  # loading (or compiling) the kernel is not the study's cost
+    if warm_up is not None:
+        warm_up()  # loading (or compiling) the integrator is not the study's cost
     start = time.perf_counter()
     _here(first[:1], records, rec_ids, on_result, runner)
     estimate = serial_estimate(time.perf_counter() - start, first[0][0].size, total)
@@ -408,7 +408,7 @@ def _window(client: Any, first: list) -> int:
     return max(32 * workers, 64, min(WINDOW, WINDOW_CELLS // per))
 
 
-def _client(scheduler: Any) -> tuple[Any, bool]:
+def _client(scheduler: Any, warm_up: Callable[[], None] | None = None) -> tuple[Any, bool]:
     """`get_client`, a cluster it starts keeping short logs of the messages it sent
     (distributed keeps the last 1000 batches of messages of every connection, the batches'
     tasks with them: hundreds of MB in the main process over a long study)."""
@@ -416,7 +416,7 @@ def _client(scheduler: Any) -> tuple[Any, bool]:
     import distributed  # noqa: F401 - its config defaults first, kept when the set ends
 
     with dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG}):
-        return get_client(scheduler)
+        return get_client(scheduler, warm_up)
 
 
 def _saver(cells: Cells, sources: Sources, bar: Progress, stats: RunStats) -> Callable:
@@ -499,7 +499,8 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     batches = (_made(cells, b, records, kernel) for b in cut)
     try:
         _compute_all(batches, stats.runs - stats.from_parts - stats.from_archive, records,
-                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run)
+                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run,
+                     kind.warm_up)
     except RunError as exc:
         kept = store.count() if store is not None else 0
         if not kept:
@@ -528,7 +529,6 @@ def _assemble(cells: Cells, sources: Sources, records: dict, attrs: dict,
     from the parts, with ``cell_key`` and netCDF chunks of one slab."""
     import xarray as xr
 
-    from .. import variables
 
     kind = cells.kind
     missing = sources.missing()
@@ -597,9 +597,6 @@ def input_files(study: Study, records_dir: str | os.PathLike | None = None
     it declares itself (``[records.<id>]``), and the records manifest and file of each of
     its manifest records (as far as the manifest can be read: a bad one is said when the
     records are loaded)."""
-    from .. import records as rec
-    from ..errors import UrmxError
-
     found = [("the study file", Path(study.path))] if study.path is not None else []
     found += [(f"the file of record {rid!r}", Path(own.path))
               for rid, own in study.own_records.items()]
@@ -779,7 +776,6 @@ def run_study(study: Study | str | os.PathLike, *, out: str | os.PathLike | None
     with Lock(parts, out):  # before reading records: a second run stops at once
         _into_archive(s, out, parts, force, records_dir, scheduler, progress, command,
                       batch_size, kernel)
-    from .archive import open_study
 
     return open_study(out)
 
@@ -832,10 +828,8 @@ def _into_archive(study: Study, out: Path, parts: Path, force: bool, records_dir
 def _remove_stale(out: Path, parts: Path, notes: list[str]) -> None:
     """Remove the temporary files of this archive and its parts that runs killed while
     writing them left (their PID no longer runs), and say so."""
-    from ..netcdf import remove_stale
-
-    gone = remove_stale(out.parent, f".{out.name}.", ".tmp")
-    gone += remove_stale(parts, ".", ".npz.tmp")
+    gone = netcdf.remove_stale(out.parent, f".{out.name}.", ".tmp")
+    gone += netcdf.remove_stale(parts, ".", ".npz.tmp")
     for path, pid in gone:
         notes.append(f"urmx: removed {path}, a temporary file left by a run that was killed "
                      f"while writing it (pid {pid}, no longer running)")
@@ -863,12 +857,11 @@ def _kept(exc: OutputError, parts: Path, then: str) -> OutputError:
     when the disk is full, else fix the cause)."""
     import errno
 
-    from ..netcdf import disk_full
 
     n = PartStore(parts, ()).count()
     if not n:
         return OutputError(f"{exc}; no finished batch is kept")
-    full = getattr(exc.__cause__, "errno", None) == errno.ENOSPC or disk_full(parts)
+    full = getattr(exc.__cause__, "errno", None) == errno.ENOSPC or netcdf.disk_full(parts)
     return OutputError(f"{exc}; {n} finished batch{'es' if n > 1 else ''} kept in "
                        f"{str(parts)!r}: {'free space on its disk' if full else 'fix that'} "
                        f"{then}")

@@ -22,14 +22,16 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from .. import catalog
 from ..errors import InputError
 
 #: the most cells a study may have unless the run raises the limit (``--max-cells``)
 MAX_CELLS = 20_000_000
 #: the largest archive (uncompressed estimate) a run writes unless raised (``--max-gb``) [GB]
 MAX_GB = 20.0
-#: most values one dimension of a study may hold (a ``{start, stop, step}`` range included)
-MAX_VALUES = 10**7
+#: most values one dimension of a study may hold (a ``{start, stop, step}`` range included;
+#: counted where the study file is read, `urmx.catalog.dimension_values`)
+MAX_VALUES = catalog.MAX_VALUES
 
 
 class SizeError(InputError):

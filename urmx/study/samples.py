@@ -14,9 +14,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from .. import records as rec
 from ..config import data_dir
 from ..errors import MissingFileError, UrmxError
 from ..records.record import Record
+from . import kinds
 
 #: the record type of a study (one type for every path: `urmx.records.Record`)
 RecordData = Record
@@ -41,8 +43,6 @@ def resolve_records(study, records_dir: str | os.PathLike | None = None) -> dict
         a file that cannot be read as its table says (wrong channel, no dt, ...) or that
         differs from its pinned ``sha256``: each with the study file, key and line.
     """
-    from .. import records as rec
-
     own = getattr(study, "own_records", {})
     manifest = _manifest(rec, records_dir, required=any(r not in own for r in study.records))
     for rid in study.records:
@@ -76,8 +76,6 @@ def _manifest(rec, records_dir, required: bool) -> dict[str, dict]:
 
 def _own(study, o, in_manifest: bool) -> Record:
     """The Record of one of the study file's own record files, read once."""
-    from .. import records as rec
-
     key = f"records.{o.table}"
     if in_manifest and not o.override:
         raise study.error(key, f"record id {o.id!r} is also a records-manifest id: choose "
@@ -88,11 +86,10 @@ def _own(study, o, in_manifest: bool) -> Record:
                           allow_unusual=o.allow_unusual)
     except UrmxError as exc:  # a RecordError, a missing file: with the study's table
         raise study.error(key, f"{o.file}: {exc}", key) from None
-    from ..kernel import WINDOW
-
-    if not rf.dt > WINDOW:  # only with allow_unusual: the kernel would refuse it later
+    window = kinds.get(study.kind).dt_above  # the kernel's merged-impact window
+    if not rf.dt > window:  # only with allow_unusual: the kernel would refuse it later
         raise study.error(key, f"{o.file}: time step dt={rf.dt:g} s is not above the "
-                          f"kernel's merged-impact window ({WINDOW:g} s)", key)
+                          f"kernel's merged-impact window ({window:g} s)", key)
     if o.sha256 and rf.sha256 != o.sha256:
         raise study.error(f"{key}.sha256", f"{o.file} has SHA-256 {rf.sha256[:12]}..., not "
                           f"the {o.sha256[:12]}... the study pins: the file changed", key,

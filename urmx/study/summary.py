@@ -22,11 +22,13 @@ import xarray as xr
 from ..errors import InputError
 from ..markdown import number
 from . import kinds
+from .archive import open_archive
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+from ..errors import got
 
 #: cells listed per differing variable by `format_diff`
 LISTED = 10
@@ -36,13 +38,9 @@ ROWS = 60
 
 def _open(archive: Any) -> tuple[xr.Dataset, str]:
     """(the loaded Dataset, its name) of a path or a Dataset."""
-    from ..reporting import open_archive
-
     if isinstance(archive, xr.Dataset):
         return archive, "(Dataset)"
     if not isinstance(archive, (str, os.PathLike)):
-        from ..errors import InputError, got
-
         raise InputError(f"archive must be a study archive's file name or an "
                          f"xarray.Dataset, got {got(archive)}")
     return open_archive(archive, "archive"), str(archive)

@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..errors import InputError
+from ..errors import InputError, path_argument
+from .archive import open_archive
 
 #: dimensions of what a cell keeps beside its scalars (not rows of the table)
 PER_CELL = ("history", "time")
@@ -132,8 +133,6 @@ def to_dataframe(archive: str | os.PathLike | xr.Dataset, where: Any = None):
     """
     import pandas as pd
 
-    from ..errors import path_argument
-    from ..reporting import open_archive
 
     if not isinstance(archive, xr.Dataset):
         path_argument("to_dataframe", "archive", archive)

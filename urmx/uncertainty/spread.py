@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from ..fragility import fit_lognormal
+
 
 def lognormal_fit(capacities, censored=None) -> tuple[float, float]:
     """(median, dispersion) of the lognormal fit of capacities (NaN entries left out);
@@ -37,8 +39,6 @@ def lognormal_fit(capacities, censored=None) -> tuple[float, float]:
     censored : array_like of bool, optional
         True where the capacity is a lower bound.
     """
-    from ..fragility import fit_lognormal
-
     x = np.asarray(capacities, dtype=float).ravel()
     c = np.zeros(x.shape, bool) if censored is None else \
         np.asarray(censored, dtype=float).ravel() == 1

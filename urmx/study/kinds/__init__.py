@@ -106,6 +106,11 @@ def register(kind: Kind) -> Kind:
     return kind
 
 
+def unregister(name: str) -> Kind:
+    """Take kind `name` out of the registry (a test's kind, after the test); returns it."""
+    return _KINDS.pop(name)
+
+
 def get(name: str) -> Kind:
     """The registered kind `name`."""
     try:

@@ -18,10 +18,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import variables
+from ...kernel import WINDOW, warm_up
+from ...kernel import run as run_kernel
 from ...model import T_REST
 from ...netcdf import INT_FILL  # the integer outputs' _FillValue on disk
 from ..batches import Batch
-from ..dataset import MISSING, NOT_RUN, STATUS, VALID
+from ..dataset import MISSING, NOT_RUN, STATUS, VALID, coord, grid_coords, status_attrs
 from .kind import Kind
 
 if TYPE_CHECKING:
@@ -99,9 +101,7 @@ def run_batch(task: dict[str, Any], acceleration: np.ndarray) -> dict[str, np.nd
     acceleration : ndarray of float
         The block's record samples, unscaled. [m s-2]
     """
-    kernel = task["kernel"]
-    if kernel is None:
-        from ...kernel import run as kernel
+    kernel = task["kernel"] or run_kernel
     walls = task["walls"]
     shape = (len(walls), len(walls[0]), len(task["cor"]), len(task["scale"]),
              len(task["impact"]), len(walls[0][0]))
@@ -139,8 +139,6 @@ def _outputs(cells: dict) -> dict[str, Any]:
 
 
 def output_attrs(name: str) -> dict[str, Any]:
-    from ..dataset import status_attrs
-
     if name == "status":
         return status_attrs()
     attrs = variables.attrs(name)
@@ -153,8 +151,6 @@ def output_attrs(name: str) -> dict[str, Any]:
 
 
 def _added_coords(study: Any) -> dict[str, xr.Variable]:
-    from ..dataset import coord
-
     dims, coords = study.dims, {}
     for k in ("scale", "damping"):
         if k in dims:
@@ -170,7 +166,6 @@ def assemble(study: Any, records: dict, cells: dict, extras: dict,
     added dimensions' coordinates, and the kept histories (`extras`, by label)."""
     import xarray as xr
 
-    from ..dataset import grid_coords
 
     names = list(study.dims)
     data_vars = {name: xr.Variable(names, arr, attrs=output_attrs(name))
@@ -190,7 +185,6 @@ def _histories(study: Any, hist: dict) -> tuple[dict, dict]:
     time axis."""
     import xarray as xr
 
-    from ..dataset import coord
 
     cells = study.histories
     labels = [h.label for h in cells]
@@ -281,4 +275,5 @@ def cell_bytes(study: Any) -> float:
 
 KIND = Kind(name="grid", unit="analyses", outputs=BATCH_OUTPUTS, task=task, run=run_batch,
             assemble=assemble, reopen=reopen, extras=extras,
-            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes, counts=counts)
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=cell_bytes, counts=counts,
+            warm_up=warm_up, dt_above=WINDOW)

@@ -32,9 +32,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import fragility, variables
+from ...kernel import WINDOW, warm_up
+from ...kernel import run as run_kernel
 from ...netcdf import INT_FILL
 from ...records.measures import dominant_frequency
 from ..batches import Batch
+from ..dataset import grid_coords
 from . import grid
 from .kind import Kind
 
@@ -195,9 +198,7 @@ def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
     arrays of the block's shape (capacity, censored, analyses, event_limits; the IDA points
     ``intensity`` and ``ratio`` with a last axis of points, NaN-padded; the record's
     intensity ``unit`` for the cell's wall and its ``predominant`` frequency). Numpy only."""
-    kernel = task["kernel"]
-    if kernel is None:
-        from ...kernel import run as kernel
+    kernel = task["kernel"] or run_kernel
     rest = grid.rest_time(task)
     if rest:
         kernel = functools.partial(kernel, **rest)
@@ -329,7 +330,6 @@ def _data_vars(cells: dict, fits: dict, measures: dict,
 def _coords(study: Any, records: dict, cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
     import xarray as xr
 
-    from ..dataset import grid_coords
 
     k = cells["intensity"].shape[-1]
     periods = np.array([[fragility.rocking_period(study.wall(w, d)) for d in study.diaphragms]
@@ -413,4 +413,5 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
             task=task, run=run_batch, assemble=assemble, reopen=reopen, archived=ARCHIVED,
-            cell_bytes=cell_bytes, counts=counts, keys=KEYS)
+            cell_bytes=cell_bytes, counts=counts, keys=KEYS,
+            warm_up=warm_up, dt_above=WINDOW)

@@ -30,6 +30,8 @@ class Kind:
     cell_bytes: Callable[[Any], float] | None = None
     counts: Callable[[Any], dict[str, int] | None] | None = None
     keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
+    warm_up: Callable[[], None] | None = None  # loads its integrator (the kernel's warm_up)
+    dt_above: float = 0.0  # a record's time step must exceed it (its integrator's window)
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""

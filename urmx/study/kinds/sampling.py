@@ -41,9 +41,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ... import variables
+from ... import fragility, variables
+from ...fragility.intensity import IM_ATTRS, record_measures
+from ...fragility.predictors import PREDICTORS, wall_predictors
+from ...model import EFFECTIVE_MASS, PAPER_G
+from ...netcdf import INT_FILL
+from ...records.readers import check_finite
+from ...uncertainty import ParameterError, apply, check_samples, modelling_fit, parse_sampling
+from ...uncertainty.sampler import GEOMETRY, PARAMETERS, coordinate_name, sample_values
 from ..batches import Batch
-from ..dataset import NOT_RUN, VALID
+from ..dataset import NOT_RUN, VALID, coord, grid_coords
 from . import grid, ida
 from .kind import Kind
 
@@ -90,8 +97,6 @@ class SamplingSettings:
 
     def sample(self, j: int) -> dict[str, Any]:
         """Sample `j`'s value of each parameter."""
-        from ...uncertainty.sampler import sample_values
-
         return sample_values(self.values, j)
 
 
@@ -123,8 +128,6 @@ def parse(study: Any) -> SamplingSettings:
     """Validate ``[study.sampling]`` (and ``[study.ida]`` beside it) and the grid, draw the
     samples and build every sample's wall of every (wall, diaphragm) cell: a bad table or
     an invalid sample is an error naming file, key and line, before any work."""
-    from ...uncertainty import ParameterError, check_samples, parse_sampling
-
     try:
         sampling = parse_sampling(study.tables["sampling"])
     except ParameterError as exc:
@@ -166,8 +169,6 @@ def identity(study: Any, records: dict) -> dict[str, list]:
 
 def _walls(study: Any, iw: int, idp: int, samples: list[int]) -> list:
     """Sample j's wall of the study's (wall, diaphragm) cell, for each j of `samples`."""
-    from ...uncertainty import apply
-
     base = study.wall(study.walls[iw], study.diaphragms[idp])
     return [apply(base, study.settings.sample(j)) for j in samples]
 
@@ -234,8 +235,6 @@ def _history_vars(cells: dict) -> dict[str, xr.Variable]:
 def _fits(cap: np.ndarray, cen: np.ndarray) -> dict[str, np.ndarray]:
     """Per (wall, diaphragm): the fit of each sample over the records and over records
     and samples together (`urmx.uncertainty.modelling_fit`)."""
-    from ...uncertainty import modelling_fit
-
     nw, nd, _, ns = cap.shape
     out = {"median_collapse_intensity": np.full((nw, nd, ns), np.nan),
            "dispersion": np.full((nw, nd, ns), np.nan),
@@ -255,7 +254,6 @@ def _capacity_vars(cells: dict, attrs: Callable) -> dict[str, xr.Variable]:
     with modelling uncertainty."""
     import xarray as xr
 
-    from ...netcdf import INT_FILL
 
     missing = "NaN where the study's pairs leave the cell out (not run)"
     stored = f"{missing}; stored as int32 with _FillValue {INT_FILL}, read as float64"
@@ -299,9 +297,6 @@ def _sample_coords(study: Any) -> dict[str, xr.Variable]:
     runs with, and the design's points of the unit hypercube."""
     import xarray as xr
 
-    from ...uncertainty.sampler import PARAMETERS, coordinate_name
-    from ..dataset import coord
-
     s = study.settings
     n = s.size
     coords = {"sample": coord("sample", "sample", np.arange(n)),
@@ -326,8 +321,6 @@ def _sample_coords(study: Any) -> dict[str, xr.Variable]:
 def _coords(study: Any, records: dict) -> dict[str, xr.Variable]:
     """The shared coordinates (a sampled wall field's replaced by the sample's), the
     sample's, and each cell's diaphragm frequency."""
-    from ..dataset import coord, grid_coords
-
     coords = grid_coords(study, records)
     drawn = _geometry_sampled(study)
     for name in list(coords):
@@ -344,8 +337,6 @@ def _coords(study: Any, records: dict) -> dict[str, xr.Variable]:
 
 def _geometry_sampled(study: Any) -> bool:
     """Whether the study draws its walls in geometry (`urmx.uncertainty.sampler.GEOMETRY`)."""
-    from ...uncertainty.sampler import GEOMETRY
-
     return any(k in study.settings.values for k in GEOMETRY)
 
 
@@ -354,7 +345,6 @@ def _drawn_coords(study: Any) -> dict[str, xr.Variable]:
     tributary plan area of the diaphragm's seismic weight (`urmx.uncertainty.sampler`)."""
     import xarray as xr
 
-    from ...model import EFFECTIVE_MASS, PAPER_G
 
     dims3 = ("wall", "diaphragm", "sample")
     out = {"slenderness": xr.Variable(dims3, _cell_walls(study, lambda w: w.slenderness),
@@ -380,10 +370,6 @@ def _predictor_vars(study: Any, records: dict) -> dict[str, xr.Variable]:
     ``predictor_<name>`` over (wall, diaphragm, sample), ``measure_<im>`` over (wall,
     diaphragm, record, sample)."""
     import xarray as xr
-
-    from ...fragility.intensity import IM_ATTRS, record_measures
-    from ...fragility.predictors import PREDICTORS, wall_predictors
-    from ...records.readers import check_finite
 
     n, nw, nd = study.settings.size, len(study.walls), len(study.diaphragms)
     walls = [w for iw, idp in np.ndindex(nw, nd) for w in _walls(study, iw, idp, list(range(n)))]
@@ -435,7 +421,6 @@ def assemble(study: Any, records: dict, cells: dict, extras: dict,
     settings = study.settings
     if settings.ida is None:
         return xr.Dataset(_history_vars(cells), coords=coords, attrs=_attrs(study, attrs))
-    from ... import fragility
 
     ctx = variables.intensity_context(settings.ida.im)
 
@@ -471,11 +456,13 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 KIND = Kind(name="sampling", table="sampling", unit="analyses", outputs=grid.BATCH_OUTPUTS,
             parse=parse, dims=dims, identity=identity, task=task, run=run_batch,
             assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
-            fills={"status": (NOT_RUN, "int8")}, cell_bytes=grid.cell_bytes)
+            fills={"status": (NOT_RUN, "int8")}, cell_bytes=grid.cell_bytes,
+            warm_up=grid.KIND.warm_up, dt_above=grid.KIND.dt_above)
 #: collapse capacities of every sample (``[study.ida]`` beside ``[study.sampling]``): the
 #: IDA kind's outputs per cell
 KIND_IDA = Kind(name="sampling-ida", table="sampling", combines=("ida",), unit="cells",
                 outputs=ida.OUTPUTS, parse=parse, dims=dims, identity=identity, task=task,
                 run=run_batch, assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
                 archived={**ida.ARCHIVED, "unit": "record_intensity"},
-                cell_bytes=ida.cell_bytes)
+                cell_bytes=ida.cell_bytes, warm_up=ida.KIND.warm_up,
+                dt_above=ida.KIND.dt_above)

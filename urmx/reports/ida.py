@@ -41,15 +41,17 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import fragility_analysis as FA
-from . import plot as P
-from .errors import InputError
-from .fragility_analysis import GROUPS, STIFFEN
-from .markdown import number as _fmt
-from .markdown import table
-from .plot import plot_capacity_resonance as plot_resonance
-from .plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
-from .reporting import (
+from .. import plot as P
+from ..analysis import ida as FA
+from ..analysis.ida import GROUPS, STIFFEN
+from ..catalog import catalog_dir
+from ..errors import InputError
+from ..fragility.fits import RESAMPLES, SEED
+from ..markdown import number as _fmt
+from ..markdown import table
+from ..plot import plot_capacity_resonance as plot_resonance
+from ..plot import plot_fragility_curves, plot_ida_curves, plot_median, plot_stiffening
+from .common import (
     DEGENERATE,
     DEGENERATE_NOTE,
     enough_records,
@@ -61,7 +63,7 @@ from .reporting import (
     save_figure,
     too_few,
 )
-from .risk_report import (
+from .ida_risk import (
     comparison_findings,
     im_comparison,
     measure_findings,
@@ -80,8 +82,6 @@ YEARS = 50.0
 
 def default_site() -> tuple[Path, Path]:
     """The illustrative hazard curve and design spectrum of ``catalog/hazard/``."""
-    from .catalog import catalog_dir
-
     return catalog_dir() / "hazard" / HAZARD, catalog_dir() / "hazard" / SPECTRUM
 
 # the figures and reductions this report used to hold, where they live now (urmx.plot,
@@ -235,8 +235,6 @@ def _medians(ds: xr.Dataset, d: xr.Dataset, groups=None) -> list[str]:
         lines += [f"No intervals: {too_few(n, 'an interval')}; the medians and "
                   "dispersions below are estimates from these records alone.", ""]
     if ci:
-        from .fragility.fits import RESAMPLES, SEED
-
         lines += [f"In brackets: the {level} studentized bootstrap interval (Efron & "
                   "Tibshirani 1993, Section 12.5: each resample standardised by its own "
                   "sandwich standard error; its coverage measured by simulation in the "

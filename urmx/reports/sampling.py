@@ -28,13 +28,13 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import fragility_analysis as FA
-from . import plot as P
-from . import uncertainty_analysis as UA
-from .markdown import number as _fmt
-from .markdown import table
-from .reporting import history_line, made_from, save_figure
-from .uncertainty.sampler import PARAMETERS
+from .. import plot as P
+from ..analysis import ida as FA
+from ..analysis import sampling as UA
+from ..markdown import number as _fmt
+from ..markdown import table
+from ..uncertainty.sampler import PARAMETERS
+from .common import history_line, made_from, save_figure
 
 MIN_SOBOL = 32  # fewer samples than this: the first-order indices are not shown
 

@@ -21,10 +21,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .assess import compare
-from .markdown import number, table
-from .provenance import code_version, describe, identity
-from .reporting import save_figure
+from ..analysis.assessment import compare
+from ..assess import PROCEDURES
+from ..jitcache import SOURCE_HASH
+from ..markdown import number, table
+from ..provenance import code_version, describe, identity
+from .common import save_figure
 
 SOFT, STIFF = ("D1", "D2"), ("D4", "D5")  # flexible and stiff diaphragms of the findings
 
@@ -192,8 +194,6 @@ def _own_change(c: xr.Dataset, p: str, soft: list[str], stiff: list[str]) -> flo
 
 
 def _procedure_lines(c: xr.Dataset) -> list[str]:
-    from .assess import PROCEDURES
-
     lines = []
     for p in map(str, c.procedure.values):
         fn = PROCEDURES.get(p)
@@ -273,8 +273,6 @@ def _write_csv(rows: list[dict], path: Path) -> None:
 
 def _kernel_now(kernel: str) -> str:
     """Whether the archive's kernel is the one running now (issue 38, item 5)."""
-    from .jitcache import SOURCE_HASH
-
     if kernel[:16] == SOURCE_HASH[:16]:
         return "The current kernel is the same."
     return (f"**The current kernel differs** (`{SOURCE_HASH[:16]}`): run the IDA again for "

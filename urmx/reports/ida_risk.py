@@ -15,14 +15,17 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import fragility_analysis as FA
-from . import plot as P
-from .errors import UrmxError
-from .fragility.fits import CONFIDENCE
-from .fragility_analysis import GROUPS, MEASURES, STIFFEN
-from .markdown import number as _fmt
-from .markdown import table
-from .reporting import (
+from .. import plot as P
+from ..analysis import ida as FA
+from ..analysis.ida import GROUPS, MEASURES, STIFFEN
+from ..errors import UrmxError
+from ..fragility import SA_AVG_PERIODS, design_sa, read_hazard, read_spectrum
+from ..fragility.fits import CONFIDENCE
+from ..fragility.intensity import SA_AVG_FLOOR, SA_AVG_WIDEN
+from ..fragility.risk import BAND_PERIODS, DesignSpectrum, HazardCurve, scaled_curve
+from ..markdown import number as _fmt
+from ..markdown import table
+from .common import (
     DEGENERATE,
     DEGENERATE_NOTE,
     MIN_RECORDS,
@@ -33,7 +36,7 @@ from .reporting import (
     save_figure,
     too_few,
 )
-from .reporting import (
+from .common import (
     ratio as _ratio,
 )
 
@@ -293,9 +296,6 @@ def risk_numbers(ds: xr.Dataset, hazard, spectrum, years: float, records_dir=Non
     extrapolated share), its change when the diaphragm is stiffened, and the margins over
     `spectrum` (None without the measures). The bootstraps resample the records' groups
     (`urmx.fragility_analysis.record_groups`) when they have them."""
-    from .fragility import read_hazard
-    from .fragility.risk import HazardCurve
-
     if not _has_measures(ds):
         return None
     curve = hazard if isinstance(hazard, HazardCurve) else read_hazard(hazard, site)
@@ -424,7 +424,6 @@ def deaggregation_lines(d: xr.Dataset, r: dict, heading: str = "###") -> list[st
     f, unit = P.display_scale(curve.units)
     cell0 = risk.isel(wall=0, diaphragm=0)
     lows, highs = cell0.band_low.values * f, cell0.band_high.values * f
-    from .fragility.risk import BAND_PERIODS
 
     periods = [0.0, *BAND_PERIODS, math.inf]
     head = ["diaphragm", "wall", "rate [1/yr]"] + [
@@ -517,10 +516,6 @@ def sa_avg_factor(ds: xr.Dataset, spectrum) -> xr.DataArray:
     PGA). A hazard curve built from the spectrum scaled by the return period factor (NZS
     1170.5: Sa(T) = Ch(T) Z R N) has in ``sa_avg`` this factor times the PGA curve's
     intensities at every return period (`urmx.fragility.risk.scaled_curve`). [1]"""
-    from .fragility import SA_AVG_PERIODS, design_sa, read_spectrum
-    from .fragility.intensity import SA_AVG_FLOOR, SA_AVG_WIDEN
-    from .fragility.risk import DesignSpectrum
-
     spec = spectrum if isinstance(spectrum, DesignSpectrum) else read_spectrum(spectrum)
     d = FA.first_cor(ds)
     tr = d.rocking_period.transpose("wall", "diaphragm").values
@@ -543,8 +538,6 @@ def im_comparison(ds: xr.Dataset, r: dict, spectrum, records_dir=None) -> xr.Dat
     at collapse differs from the code spectrum's, and ``spread = exp(k^2 (beta_sa_avg^2 -
     beta_pga^2) / 2)``, the dispersions. None without a pga curve or a spectrum, or when no
     diaphragm of the archive is one the comparison is shown on (`STIFFEN`: an own support)."""
-    from .fragility.risk import scaled_curve
-
     if r is None or spectrum is None or r["curve"].im != "pga":
         return None
     if not any(FA.base_label(str(x)) in STIFFEN for x in ds.diaphragm.values):

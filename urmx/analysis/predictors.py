@@ -22,6 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from ..fragility.predictors import PREDICTORS
+from ..fragility.ranking import fit, rank, vif
+from ..uncertainty.spread import lognormal_fit
+
 #: the sampled inputs of the design, in report order (``storey`` as 1 for higher storey)
 INPUTS = ("thickness", "height", "crack_ratio", "overburden_ratio", "diaphragm_weight",
           "pmr", "diaphragm_frequency", "rigid_top", "damping", "storey")
@@ -48,9 +52,6 @@ def population(ds) -> dict[str, Any]:
     ``storey`` (str), ``rigid`` (bool), ``median_pga`` and ``median_sa_avg`` (m s-2), the
     (record, wall) tables ``capacity`` (PGA) and ``censored``, the records' measures
     ``measure_<im>`` and ``predominant_frequency`` (record)."""
-    from .fragility.predictors import PREDICTORS
-    from .uncertainty.spread import lognormal_fit
-
     pop: dict[str, Any] = {}
     for name in INPUTS:
         if name in ds.coords:
@@ -112,8 +113,6 @@ def rankings(pop: dict[str, Any], replicates: int = 200, k: int = 5,
     """(storey, measure) -> `urmx.fragility.ranking.Ranking` of the walls on flexible
     diaphragms of that storey, the log median capacity in that measure; with ``n`` walls
     and the ranked data kept on the ranking as ``x`` and ``y``."""
-    from .fragility.ranking import rank
-
     out = {}
     for storey in STOREYS:
         mask = (pop["storey"] == storey) & ~pop["rigid"]
@@ -132,8 +131,6 @@ def rigid_reference(pop: dict[str, Any], replicates: int = 200, seed: int = 37):
     """The walls with rigid diaphragms (both storeys together): each wall-alone predictor
     alone, in PGA (a `urmx.fragility.ranking.Ranking`; None with fewer than 10 such
     walls)."""
-    from .fragility.ranking import rank
-
     mask = pop["rigid"]
     if mask.sum() < 10:
         return None
@@ -146,8 +143,6 @@ def rigid_reference(pop: dict[str, Any], replicates: int = 200, seed: int = 37):
 def relation(r, index: int) -> dict[str, Any]:
     """The fitted power law of a ranked set: ``C = exp(a) prod x_i^b_i`` with its residual
     dispersion (log standard deviation) and VIF."""
-    from .fragility.ranking import fit, vif
-
     names = r.sets[index]
     x = np.column_stack([r.x[n] for n in names])
     coef, beta = fit(x, r.y)

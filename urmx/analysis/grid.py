@@ -31,9 +31,10 @@ import numpy as np
 import xarray as xr
 from scipy.stats import rankdata
 
-from .errors import InputError, UrmxError
-from .variables import SCALARS, stamp
-from .variables import attrs as registry_attrs
+from ..errors import InputError, UrmxError
+from ..model import Wall
+from ..variables import SCALARS, stamp
+from ..variables import attrs as registry_attrs
 
 GRID_DIMS = ("wall", "diaphragm", "record", "cor")
 
@@ -288,8 +289,6 @@ def instability_displacements(ds: xr.Dataset) -> xr.Dataset:
     ``mass(wall)`` and ``diaphragm_mass(diaphragm)`` (the masses passed to ``urmx.Wall``,
     i.e. effective masses); theta0 does not depend on stiffness, damping or PMR.
     """
-    from .model import Wall
-
     need = ["thickness", "height", "crack_ratio", "mass", "diaphragm_mass"]
     _require(ds, need, "instability displacements (Table VI)")
     walls, diaphragms = ds["wall"].values, ds["diaphragm"].values

@@ -25,9 +25,13 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import variables
-from .errors import InputError
-from .jitcache import SOURCE_HASH
+from .. import variables
+from ..errors import InputError
+from ..jitcache import SOURCE_HASH
+from ..simulation import simulate
+from ..study.archive import open_archive
+from ..study.file import load_study, load_study_text
+from ..study.samples import resolve_records
 
 #: the optional dimensions a cell may be picked along, with the study's default
 OPTIONAL = ("cor", "scale", "impact", "damping")
@@ -37,8 +41,6 @@ def load_archived_study(ds: xr.Dataset, where: str | os.PathLike, study_file: An
     """The study of an archive: `study_file` when given, else the study text the archive
     carries, read as if it lay in folder `where` (the file's own record files are
     resolved against it)."""
-    from .catalog import load_study, load_study_text
-
     if study_file is not None:
         return load_study(study_file)
     text = str(ds.attrs.get("study", ""))
@@ -90,8 +92,6 @@ def pick(ds: xr.Dataset, wall: str, diaphragm: str, record: str,
 def not_run(archive: Any, cell: dict) -> bool:
     """Whether the study left `cell` out (status ``not_run``: a wall not paired with the
     record): the archive holds no result of it to compare with."""
-    from .reporting import open_archive
-
     ds = open_archive(archive)
     if "status" not in ds:
         return False
@@ -156,10 +156,6 @@ def recompute(archive: Any, wall: str, diaphragm: str, record: str, *,
         An unknown label, a missing choice, or a kernel or record that is not the
         archive's (`check_provenance`).
     """
-    from .reporting import open_archive
-    from .simulation import simulate
-    from .study.samples import resolve_records
-
     path = Path(archive)
     ds = open_archive(path)
     ida = "collapse_intensity" in ds
@@ -196,8 +192,6 @@ def compare(archive: Any, cell: dict, sim: xr.Dataset) -> dict[str, tuple[float,
     """The scalars of `cell` in the archive that differ from the recomputed ones, bit for
     bit ({name: (archive, recomputed)}; NaN equals NaN); empty when all agree. Only the
     outputs the archive stores per cell are compared (a grid's; an IDA archive has none)."""
-    from .reporting import open_archive
-
     ds = open_archive(archive)
     diff = {}
     for name in variables.SCALARS:
@@ -214,8 +208,6 @@ def compare(archive: Any, cell: dict, sim: xr.Dataset) -> dict[str, tuple[float,
 
 def compared(archive: Any, cell: dict) -> int:
     """How many of the archive's scalars `compare` looks at for `cell`."""
-    from .reporting import open_archive
-
     ds = open_archive(archive)
     return sum(1 for n in variables.SCALARS if n in ds and not set(ds[n].dims) - set(cell))
 

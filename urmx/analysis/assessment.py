@@ -23,10 +23,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..assess import PROCEDURES
+from ..assess.demand import RecordDemand, position_of, record_demand
 from ..errors import InputError, MissingFileError
 from ..model import Wall
 from ..records.record import as_record
-from .demand import RecordDemand, position_of, record_demand
+from ..study.file import load_study
 
 CAPACITY_ATTRS = {"long_name": "record scale factor at which the procedure's check is at its "
                                "limit", "units": "1"}
@@ -65,8 +67,6 @@ def compare(archive, procedures: dict[str, Callable] | None = None, records_dir=
         ``reason`` a procedure is not applicable (procedure); the archive's provenance in
         the attributes.
     """
-    from . import PROCEDURES
-
     procs = dict(PROCEDURES if procedures is None else procedures)
     if not procs:
         raise InputError("compare: no procedures to compare")
@@ -122,8 +122,6 @@ def _open(archive) -> xr.Dataset:
 def _walls(ds: xr.Dataset, wall_ids: list[str], diaphragm_ids: list[str]
            ) -> dict[tuple[str, str], Wall]:
     """The cells' walls, from the study file the archive holds."""
-    from ..catalog import load_study
-
     text = ds.attrs.get("study")
     if not text:
         raise InputError("the archive holds no study file (attrs['study']): give walls=")

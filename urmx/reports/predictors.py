@@ -24,8 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from . import predictors_analysis as pa
-from .reporting import made_from
+from ..analysis import predictors as pa
+from ..errors import InputError
+from ..fragility.ranking import recommend, within
+from .common import made_from
 
 LABELS = {"slenderness": "h/t", "height": "h", "thickness": "t",
           "static_acceleration": "a_rock (Table I M0)", "instability_case2": "Delta_2",
@@ -55,8 +57,6 @@ def analyse(ds, replicates: int = 200) -> dict[str, Any]:
     ranks = pa.rankings(pop, replicates=replicates)
     rec = {}
     for key, r in ranks.items():
-        from .fragility.ranking import recommend
-
         i = recommend(r)
         ht = r.index(("slenderness",))
         rec[key] = {"recommended": pa.relation(r, i), "best": pa.relation(r, 0),
@@ -351,8 +351,6 @@ def _share_of(r, names: tuple[str, ...]) -> float:
 def _findings(a: dict[str, Any]) -> list[str]:
     """The answers to the paper's two questions (Section 6.3.2), in words from the
     numbers."""
-    from .fragility.ranking import within
-
     lines = ["**Is h/t a suitable criterion on flexible diaphragms?**", ""]
     verdicts = {k: within(r, r.index(("slenderness",))) for k, r in a["ranks"].items()}
     picks = sorted({_label(a["rec"][k]["recommended"]["names"]) for k in a["ranks"]})
@@ -533,7 +531,6 @@ def main(argv=None) -> int:
     parser.add_argument("--run-seconds", type=float, default=None,
                         help="the study's run time, when the archive's times do not give it")
     args = parser.parse_args(argv)
-    from .errors import InputError
 
     if not Path(args.archive).is_file():
         raise SystemExit(f"urmx: no archive {args.archive} (run: urmx run wall-population "

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .errors import InputError, MissingFileError
+from ..jitcache import SOURCE_HASH
+from ..study.archive import open_archive  # noqa: F401 - re-exported for the reports
 
 #: the time stamp an archive's ``history`` lines start with (``2026-11-23T15:34:59+00:00 ``)
 _STAMP = re.compile(r"^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d(?:\.\d+)?(?:Z|[+-]\d\d:\d\d)?\s+")
@@ -24,29 +25,6 @@ def history_line(ds: xr.Dataset) -> str:
     checkout's ``git status`` unclean after ``urmx paper``."""
     lines = str(ds.attrs.get("history", "")).strip().splitlines()
     return _STAMP.sub("", lines[-1].strip()) if lines else ""
-
-
-def open_archive(archive, what: str = "study archive") -> xr.Dataset:
-    """A Dataset loaded from a study archive path (`urmx.open_study`), or as given.
-
-    Raises
-    ------
-    urmx.errors.MissingFileError
-        No such file (``no <what> 'path'``).
-    urmx.errors.InputError
-        A file that is not a readable netCDF archive.
-    """
-    if isinstance(archive, xr.Dataset):
-        return archive
-    path = Path(archive)
-    if not path.is_file():
-        raise MissingFileError(f"no {what} {str(path)!r}")
-    from .study import open_study
-
-    try:
-        return open_study(path).load()
-    except (OSError, ValueError) as exc:  # not netCDF, or damaged
-        raise InputError(f"{str(path)!r} is not a readable {what}: {exc}") from None
 
 
 def save_figure(axes, folder: Path, name: str, dpi: int = 110, palette: bool = False) -> str:
@@ -145,8 +123,6 @@ def made_from(ds: xr.Dataset, name: str = "archive", commit: bool = True) -> str
     or environment writes again (`urmx paper` in CI), whose text must not change with each
     new commit, or with the numba, llvmlite and Python builds the hash also stamps, when
     its numbers do not (issue 33, item 3); whether the kernel differs is still said."""
-    from .jitcache import SOURCE_HASH
-
     at = str(ds.attrs.get("urmx_git_commit", "none"))
     kernel = str(ds.attrs.get("kernel_source_hash", "unknown"))
     code = ("an unrecorded commit" if at in ("none", "") else

@@ -16,10 +16,9 @@ import math
 import numpy as np
 import xarray as xr
 
-from . import fragility_analysis as FA
-from .errors import InputError
-from .reporting import open_archive
-from .uncertainty import (
+from ..errors import InputError
+from ..study.archive import open_archive
+from ..uncertainty import (
     R2_THRESHOLD,
     coordinate_name,
     prcc,
@@ -27,6 +26,7 @@ from .uncertainty import (
     variance_shares,
     variance_split,
 )
+from . import ida as FA
 
 LAWS = ("scale", "contact")  # the impact laws, in the order shown
 

@@ -23,24 +23,29 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from . import analysis as A
-from .catalog import Catalog, CatalogError, catalog_dir, load_catalog
-from .errors import MissingFileError
-from .markdown import table
-from .model import PAPER_G, RIGID
-from .variables import attrs as registry_attrs
+from ..analysis import grid as A
+from ..catalog import Catalog, CatalogError, catalog_dir, load_catalog
+from ..config import records_dir
+from ..errors import MissingFileError
+from ..kernel import warm_up
+from ..markdown import table
+from ..model import PAPER_G, RIGID
+from ..study.clients import get_client, owning
+from ..study.engine import run_study
+from ..variables import attrs as registry_attrs
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+from .. import records
 
 # ---- criteria thresholds (urmx's choices, not the paper's numbers) ----------------------------
 #: a magnitude the paper states as "nearly X" agrees within this absolute band [1]
@@ -64,6 +69,45 @@ FAMILY1 = (11, 12)  # the unfavourable patterns
 #: reads their archives)
 STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
            "verification-intensity")
+
+
+def run_paper(out: str | os.PathLike = "results", scheduler: Any = None,
+              wrap: Callable[[Path, Callable[[], Any]], Any] | None = None,
+              say: Callable[[str], Any] | None = None, **options: Any) -> list[Path]:
+    """Run the paper's studies (:data:`STUDIES`) into ``<out>/<study>.nc`` on one cluster
+    (``urmx paper``); returns the archives' paths, which `urmx.reports.paper.write_report`
+    makes the paper's report of.
+
+    Parameters
+    ----------
+    out : path
+        Folder of the archives (created if needed); a study whose archive is complete is
+        not run again (`urmx.run_study` resumes).
+    scheduler : optional
+        As for `urmx.run_study`; one client serves all four studies (``"serial"``: none).
+    wrap : callable, optional
+        ``wrap(path, run)`` calls ``run()``, the run of the study writing `path` (the
+        command line says there what an interrupted run keeps); default: ``run()``.
+    say : callable, optional
+        Told the study about to run (``name -> path``).
+    **options
+        Any other keyword of `urmx.run_study` (progress, batch_size, records_dir, command,
+        force, max_cells, max_gb).
+    """
+    out = Path(out)
+    records_dir(options.get("records_dir"))  # a missing folder is said before a cluster
+    archives = []
+    client = get_client(scheduler, warm_up) if scheduler != "serial" else (None, False)
+    with owning(*client) as client:
+        for name in STUDIES:
+            path = out / f"{name}.nc"
+            if say is not None:
+                say(f"{name} -> {path}")
+            run = partial(run_study, name, out=path,
+                          scheduler=client if client else "serial", **options)
+            (wrap or (lambda _, run: run()))(path, run)
+            archives.append(path)
+    return archives
 
 
 # ---- the paper's numbers ----------------------------------------------------------------------
@@ -133,8 +177,7 @@ def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float
     """Table V's significant frequency range of every paper record, from the records
     manifest's ``paper_frequency_range_hz`` (``{record id: (low, high)}`` [Hz])."""
     if manifest is None:
-        from .records import manifest as read_manifest
-        manifest = read_manifest()
+        manifest = records.manifest()
     out = {}
     for rid, entry in manifest.items():
         text = entry.get("paper_frequency_range_hz")
@@ -145,9 +188,8 @@ def significant_frequency(manifest: dict | None = None) -> dict[str, tuple[float
 
 
 def _manifest() -> dict:
-    from .records import manifest as read_manifest
     try:
-        return read_manifest()
+        return records.manifest()
     except (FileNotFoundError, ValueError):
         return {}
 

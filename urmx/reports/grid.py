@@ -27,9 +27,11 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import plot as P
-from .markdown import number, table
-from .reporting import open_archive, save_figure
+from .. import plot as P
+from .. import variables
+from ..markdown import number, table
+from ..study.summary import info
+from .common import made_from, open_archive, save_figure
 
 #: outputs drawn in a figure, in this order, when the archive has them
 MAIN = ("instability_ratio", "collapsed", "peak_top_displacement", "peak_crack_displacement",
@@ -75,8 +77,6 @@ def write_report(archive: Any, out_dir: str | os.PathLike, name: str | None = No
     Path
         ``REPORT.md``.
     """
-    from .study.summary import info
-
     ds = open_archive(archive)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -100,7 +100,7 @@ def write_report(archive: Any, out_dir: str | os.PathLike, name: str | None = No
 
 
 def _header(found: dict) -> list[str]:
-    from . import __version__
+    from .. import __version__
 
     name = found["study_name"] or Path(found["path"]).stem
     cells = ", ".join(f"{k} {v}" for k, v in found["cells"].items())
@@ -120,8 +120,6 @@ def _header(found: dict) -> list[str]:
 
 def _made_from(found: dict) -> list[str]:
     """The code the archive was made with and whether its kernel is the current one."""
-    from .reporting import made_from
-
     return [made_from(xr.Dataset(attrs=dict(found["attrs"])))]
 
 
@@ -266,8 +264,6 @@ def _dim_label(da: xr.DataArray, dim: str | None) -> str:
         return ""
     attrs = da[dim].attrs if dim in da.coords else {}
     if not attrs.get("long_name"):
-        from . import variables
-
         try:
             attrs = variables.attrs(dim)
         except KeyError:

@@ -6,8 +6,7 @@ Figs. 5-10 and the findings of its Sections 6-7, regenerated beside the paper's 
 ``verification-intensity`` (global attr ``study``); a kind not given, or a piece an archive
 lacks, is reported as missing. The paper's numbers come from :mod:`urmx.paper`.
 
-``write_reports(archives, out)`` is ``urmx report``: the paper report of the paper's
-archives, and the generic report (`urmx.generic_report`) of every other archive.
+`urmx.reports.write_reports` (``urmx report``) gives it the paper's archives.
 """
 
 from __future__ import annotations
@@ -22,14 +21,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import analysis as A
-from . import paper as PP
-from . import plot as P
-from .markdown import number as _fmt
-from .markdown import table
-from .paper import STUDIES
-from .reporting import history_line, open_archive, save_figure
-from .variables import attrs as registry_attrs
+from .. import paper as PP
+from .. import plot as P
+from ..analysis import grid as A
+from ..markdown import number as _fmt
+from ..markdown import table
+from ..paper import STUDIES
+from ..variables import attrs as registry_attrs
+from .common import history_line, made_from, open_archive, save_figure
 
 #: the urmx version at the start of a history line (``urmx 0.2.0.post3+g1a2b3c4: ``)
 _VERSION = re.compile(r"^urmx \S+: ")
@@ -170,42 +169,6 @@ def write_report(archives, out_dir: str | os.PathLike) -> Path:
     return path
 
 
-def report_folders(archives: list, out: str | os.PathLike | None = None
-                   ) -> tuple[list[tuple[Any, xr.Dataset]], Path | None,
-                              list[tuple[Any, xr.Dataset, Path]]]:
-    """Where ``urmx report`` writes: (the paper's archives, the paper report's folder or
-    None, [(archive, Dataset, folder)] of every other archive).
-
-    The paper report goes to `out` (default ``reports/paper``). Any other archive gets its
-    own folder: `out` when it is the only archive given, else ``<out or reports>/<file
-    name without .nc>`` (the study name for a Dataset).
-    """
-    opened = [(a, open_archive(a)) for a in archives]
-    paper = [(a, ds) for a, ds in opened if study_kind(ds) is not None]
-    own = []
-    for a, ds in opened:
-        if study_kind(ds) is None:
-            stem = Path(a).stem if not isinstance(a, xr.Dataset) else \
-                str(ds.attrs.get("study_name", "study"))
-            own.append((a, ds, Path(out) if out is not None and len(opened) == 1
-                        else Path(out if out is not None else "reports") / stem))
-    return paper, (Path(out if out is not None else "reports/paper") if paper else None), own
-
-
-def write_reports(archives, out: str | os.PathLike | None = None) -> list[Path]:
-    """``urmx report``: the paper report of the paper's archives and the generic report
-    (`urmx.generic_report`) of every other archive, in the folders of
-    :func:`report_folders`; returns the ``REPORT.md`` paths."""
-    from . import generic_report
-
-    if isinstance(archives, (str, os.PathLike, xr.Dataset)):
-        archives = [archives]
-    paper, folder, own = report_folders(list(archives), out)
-    paths = [write_report([ds for _, ds in paper], folder)] if paper else []
-    return paths + [generic_report.write_report(ds, where, name=None if isinstance(
-        a, xr.Dataset) else str(a)) for a, ds, where in own]
-
-
 def _sections() -> list[tuple[str, Callable]]:
     """(title, body(report, lines)) of every section, in the report's order."""
     return [
@@ -246,7 +209,6 @@ def _preamble(rep: _Report, notes: list[str]) -> list[str]:
         dims = ", ".join(f"{d} {n}" for d, n in ds.sizes.items())
         rows.append([study_kind(ds), dims, _VERSION.sub("", history_line(ds))])
     lines += table(["study", "dimensions", "command (the history's last line)"], rows) + [""]
-    from .reporting import made_from
 
     lines += [f"- `{study_kind(ds)}`: " + made_from(ds, commit=False)
               for ds in rep.studies.values()] + [""]

@@ -12,7 +12,26 @@ import math
 import numpy as np
 import xarray as xr
 
-from .analysis import spearman
+from .. import records as rec
+from ..config import records_dir as folder
+from ..config import shipped_records
+from ..errors import InputError, UrmxError
+from ..fragility import (
+    IM_ATTRS,
+    RESAMPLES,
+    SA_AVG_PERIODS,
+    collapse_rate,
+    design_sa,
+    fit_lognormal,
+    read_hazard,
+    read_spectrum,
+)
+from ..fragility.fits import function_interval, resample_weights
+from ..fragility.intensity import DAMPING
+from ..fragility.risk import BAND_PERIODS, DesignSpectrum, HazardCurve, measure, rates
+from ..records.measures import geometric_mean_psa, pseudo_spectral_acceleration
+from ..records.record import as_record
+from .grid import spearman
 
 GROUPS = {"top": "single storey (diaphragm on top, ground below)",
           "both": "higher storey (between two diaphragms alike)"}
@@ -127,8 +146,6 @@ MEASURES = ("pga", "pgv", "sa_wall", "sa_diaphragm", "sa_avg")
 def require_measures(ds: xr.Dataset) -> None:
     """Refuse an IDA archive written before it held the scale factor at collapse and each
     record's intensity in every measure."""
-    from .errors import InputError
-
     missing = [n for n in ("collapse_scale", *(f"record_{im}" for im in MEASURES))
                if n not in ds]
     if missing:
@@ -143,9 +160,6 @@ def record_groups(ds: xr.Dataset, records_dir=None) -> np.ndarray | None:
     ids = [str(r) for r in ds.record.values]
     if "group" in ds.coords:
         return np.array([str(g) for g in ds.group.values], dtype=object)
-    from . import records as rec
-    from .errors import UrmxError
-
     try:
         man = rec.manifest(records_dir)
     except (UrmxError, OSError):
@@ -174,14 +188,10 @@ def capacities(ds: xr.Dataset, im: str, records_dir=None) -> xr.DataArray:
     record's intensity in `im` (no new analyses), with the units and name of the measure.
     ``sa(T)`` (Sa at a fixed period, `urmx.fragility.risk.measure`) is computed from the
     records, read again from `records_dir`."""
-    from .fragility import IM_ATTRS
-
     require_measures(ds)
     if im.startswith("sa("):
         return _capacities_at_period(ds, im, records_dir)
     if im not in MEASURES:
-        from .errors import InputError
-
         raise InputError(f"im={im!r}: use one of {', '.join(MEASURES)}")
     cap = ds.collapse_scale * ds[f"record_{im}"]
     units, name = IM_ATTRS[im]
@@ -192,12 +202,6 @@ def capacities(ds: xr.Dataset, im: str, records_dir=None) -> xr.DataArray:
 def _capacities_at_period(ds: xr.Dataset, im: str, records_dir=None) -> xr.DataArray:
     """Capacities in ``sa(T)``: the scale factor at collapse times each record's 5 %-damped
     Sa at T (as analysed: times its scale factor), the records read again."""
-    from .errors import InputError, UrmxError
-    from .fragility.intensity import DAMPING
-    from .fragility.risk import measure
-    from .records.measures import pseudo_spectral_acceleration
-    from .records.record import as_record
-
     period = float(measure(im)[3:-1])
     try:
         recs = [as_record(str(r), records_dir) for r in ds.record.values]
@@ -223,8 +227,6 @@ def fit_cells(cap: np.ndarray, cen: np.ndarray, groups=None,
     """`urmx.fragility.fit_lognormal` of each (wall, diaphragm) row of capacities `cap`
     (shape (wall, diaphragm, record), NaN where a record did not run) with their censored
     flags `cen`: `FIT_NAMES` -> arrays of shape (wall, diaphragm), NaN where no fit."""
-    from .fragility import RESAMPLES, fit_lognormal
-
     out = {n: np.full(cap.shape[:2], np.nan) for n in FIT_NAMES}
     for iw, idp in np.ndindex(cap.shape[:2]):
         ran = np.isfinite(cap[iw, idp])
@@ -275,10 +277,6 @@ def record_magnitude_distance(ds: xr.Dataset, records_dir=None) -> tuple[np.ndar
     ids = [str(r) for r in ds.record.values]
     if "magnitude" in ds.coords and "distance" in ds.coords:
         return ds.magnitude.values.astype(float), ds.distance.values.astype(float)
-    from . import records as rec
-    from .config import records_dir as folder
-    from .config import shipped_records
-
     man = rec.manifest(records_dir)
     mag = np.array([float(man.get(r, {}).get("magnitude", np.nan)) for r in ids])
     rrup = {}
@@ -320,8 +318,6 @@ def group_slope_p(x: np.ndarray, y: np.ndarray, groups, resamples: int = 1000,
     (whole groups resampled, each resample's slope studentized by its cluster-robust
     standard error; Cameron, Gelbach & Miller 2008, Rev. Econ. Stat. 90(3), Section
     III.B): the share of resamples with ``|b* - b| / se* >= |b| / se``."""
-    from .fragility.fits import resample_weights
-
     codes = np.unique(np.asarray(groups, dtype=str), return_inverse=True)[1].ravel()
     onehot = (codes[:, None] == np.arange(int(codes.max()) + 1)[None, :]).astype(float)
     b0, se0 = _slopes(x, y, np.ones((1, x.size)), onehot)
@@ -380,10 +376,6 @@ def collapse_risk(ds: xr.Dataset, hazard, years: float = 50.0,
     (``tail_share``), from ground motions beyond the intensities the file marks as computed
     (``extrapolated_share``) and from each band of return periods (``band_share``, with
     the bands' intensities ``band_low`` / ``band_high``)."""
-    from .fragility import RESAMPLES, collapse_rate, read_hazard
-    from .fragility.fits import function_interval
-    from .fragility.risk import BAND_PERIODS, HazardCurve, rates
-
     curve = hazard if isinstance(hazard, HazardCurve) else read_hazard(hazard)
     d = first_cor(ds)
     cap = capacities(d, curve.im, records_dir).transpose("wall", "diaphragm", "record").values
@@ -394,7 +386,6 @@ def collapse_risk(ds: xr.Dataset, hazard, years: float = 50.0,
     nb = len(BAND_PERIODS) + 1
     band = {n: np.full(cap.shape[:2] + (nb,), np.nan) for n in ("band_low", "band_high",
                                                                  "band_share")}
-    from .fragility import fit_lognormal
 
     for iw, idp in np.ndindex(cap.shape[:2]):
         ran = np.isfinite(cap[iw, idp])
@@ -453,9 +444,6 @@ def margins(ds: xr.Dataset, spectrum) -> xr.Dataset:
     """The median collapse capacity in ``sa_wall`` over the design spectrum's Sa at the
     wall's rocking period, per (wall, diaphragm) at the first COR (``margin`` [1], with
     ``median_sa_wall`` and ``design_sa`` [m s-2] and ``rocking_period`` [s])."""
-    from .fragility import design_sa, read_spectrum
-    from .fragility.risk import DesignSpectrum
-
     spec = spectrum if isinstance(spectrum, DesignSpectrum) else read_spectrum(spectrum)
     fits = fits_in(ds, "sa_wall", resamples=0)
     period = first_cor(ds).rocking_period
@@ -480,11 +468,6 @@ def sa_avg_alternatives(ds: xr.Dataset, records_dir=None) -> dict[str, xr.DataAr
     ``sa_avg`` over each period range of `SA_AVG_RANGES` (10 log-spaced periods), from the
     scale factors at collapse and the records' spectra (the records are read again: no
     new analyses). Empty when the records cannot be read."""
-    from .errors import UrmxError
-    from .fragility import SA_AVG_PERIODS, fit_lognormal
-    from .records.measures import geometric_mean_psa
-    from .records.record import as_record
-
     require_measures(ds)
     d = first_cor(ds)
     tr = d.rocking_period.transpose("wall", "diaphragm").values

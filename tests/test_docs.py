@@ -21,8 +21,6 @@ import inspect
 import os
 import re
 import subprocess
-import sys
-import zipfile
 from pathlib import Path
 
 import pytest
@@ -434,36 +432,3 @@ def test_a_checkouts_release_is_its_nearest_tag(tmp_path, monkeypatch):
         provenance.git_release.cache_clear()
 
 
-@pytest.mark.slow
-def test_a_build_outside_git_gets_the_fallback_version(tmp_path):
-    """The tree (committed files with the working tree's changes, `git stash create`)
-    exported by ``git archive`` to a folder without git, built into a wheel and installed:
-    the wheel is the ``fallback_version`` of pyproject.toml, and ``urmx.__version__`` and
-    ``urmx --version`` there say it."""
-    stash = _git(ROOT, "stash", "create") or "HEAD"
-    src = tmp_path / "src"
-    src.mkdir()
-    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", stash],
-                             capture_output=True, check=True).stdout
-    subprocess.run(["tar", "-x", "-C", str(src)], input=archive, check=True)
-    assert not (src / ".git").exists()
-    env = {k: v for k, v in os.environ.items() if not k.startswith("SETUPTOOLS_SCM")}
-    built = subprocess.run([sys.executable, "-m", "pip", "wheel", ".", "--no-deps", "-q", "-w",
-                            str(tmp_path / "dist")], cwd=src, capture_output=True, text=True,
-                           env=env, timeout=900)
-    assert built.returncode == 0, built.stderr[-3000:]
-    (wheel,) = (tmp_path / "dist").glob("urmx-*.whl")
-    version = fallback_version()
-    with zipfile.ZipFile(wheel) as z:
-        meta = z.read(f"urmx-{version}.dist-info/METADATA").decode()
-    assert f"\nVersion: {version}\n" in meta
-    target = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--no-index",
-                    "--target", str(target), str(wheel)], check=True, capture_output=True)
-    env = dict(os.environ, PYTHONPATH=str(target))
-    said = subprocess.run([sys.executable, "-c", "import urmx, urmx.cli as c; "
-                           "print(urmx.__version__, urmx.__file__); c.main(['--version'])"],
-                          cwd=tmp_path, env=env, capture_output=True, text=True)
-    first, second = said.stdout.splitlines()
-    assert first.split()[0] == version and Path(first.split()[1]).is_relative_to(target)
-    assert second == f"urmx {version}"

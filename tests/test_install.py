@@ -115,6 +115,24 @@ def test_the_checkout_reads_its_own_folders():
 
 
 @pytest.mark.slow
+def test_a_build_outside_git_gets_the_fallback_version(wheel, installed, tmp_path):
+    """The wheel is built from a copy of the sources without git (`_copy_sources`): it is
+    the ``fallback_version`` of pyproject.toml, and ``urmx.__version__`` and ``urmx
+    --version`` of its install say it (versions come from git tags, issue 40)."""
+    version = fallback_version()
+    assert wheel.name.startswith(f"urmx-{version}-")
+    with zipfile.ZipFile(wheel) as z:
+        meta = z.read(f"urmx-{version}.dist-info/METADATA").decode()
+    assert f"\nVersion: {version}\n" in meta
+    env = dict(os.environ, PYTHONPATH=str(installed))
+    said = subprocess.run([sys.executable, "-c", "import urmx, urmx.cli as c; "
+                           "print(urmx.__version__, urmx.__file__); c.main(['--version'])"],
+                          cwd=tmp_path, env=env, capture_output=True, text=True)
+    first, second = said.stdout.splitlines()
+    assert first.split()[0] == version and Path(first.split()[1]).is_relative_to(installed)
+    assert second == f"urmx {version}"
+
+
 def test_installed_wheel_runs_outside_the_checkout(installed, tmp_path, records_dir, capsys):
     work = tmp_path / "elsewhere"
     work.mkdir()

@@ -32,8 +32,7 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
-from . import kernel, reference
-from .records.record import as_record
+from . import kernel
 
 SLOWDOWN, START_SLOWDOWN = 3.0, 2.0  # limits on the kernel's and the start-up slowdown
 MAX_ERROR = 1e-9  # ... and on its relative peak error against the reference
@@ -59,6 +58,8 @@ def load_record(record_id: str, window: float | None = None) -> tuple[np.ndarray
     """(samples [m s-2], dt [s], manifest scale factor) of a manifest record
     (`urmx.records.as_record`: unscaled samples, the scale factor beside them), optionally
     only its first `window` seconds."""
+    from .records.record import as_record  # (the guard's start-up process stays light)
+
     rec = as_record(record_id)
     ag = rec.acceleration
     if window is not None:
@@ -180,7 +181,9 @@ def measure(quick: bool = False) -> dict:
     first = time.perf_counter() - t0
     t = median_time(lambda: kernel.run(wall, ag, dt, scale=sf), repeat=5,
                     min_time=0.3 if quick else 2.0)
-    ref = reference.run(wall, ag, dt, scale=sf, rtol=REFERENCE_RTOL)
+    from .reference import run as run_reference  # scipy.integrate: 0.5 s of an import
+
+    ref = run_reference(wall, ag, dt, scale=sf, rtol=REFERENCE_RTOL)
     err = rel_error(res, ref)
     return {"machine_class": machine_class(), "seconds": t["median"], "first_call": first,
             "repeats": t["repeats"], "events": res["events"],

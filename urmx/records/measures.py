@@ -125,6 +125,16 @@ def _fas(acc, dt):
     return np.fft.rfftfreq(n, dt), spec
 
 
+def _window(x):
+    """The Konno-Ohmachi weight ``(sin x / x)^4`` at ``x = b log10(f / fc)``: 1 at the
+    centre, 0 beyond the main lobe (``|x| > pi``)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = (np.sin(x) / x) ** 4
+    w[np.abs(x) < 1e-12] = 1.0
+    w[np.abs(x) > np.pi] = 0.0
+    return w
+
+
 def _konno_ohmachi(freq, amp, centres, bandwidth):
     """Konno-Ohmachi smoothing of ``amp(freq)`` evaluated at ``centres``.
 
@@ -142,11 +152,7 @@ def _konno_ohmachi(freq, amp, centres, bandwidth):
     hi = np.searchsorted(f, centres * 10.0 ** half, side="right")
     out = np.zeros(centres.size)
     for i, (fc, i0, i1) in enumerate(zip(centres, lo, hi, strict=True)):
-        x = bandwidth * np.log10(f[i0:i1] / fc)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            w = (np.sin(x) / x) ** 4
-        w[np.abs(x) < 1e-12] = 1.0
-        w[np.abs(x) > np.pi] = 0.0
+        w = _window(bandwidth * np.log10(f[i0:i1] / fc))
         total = w.sum()
         if total > 0:
             out[i] = (w @ a[i0:i1]) / total
@@ -158,11 +164,7 @@ def _konno_ohmachi_full(freq, amp, centres, bandwidth):
     yardstick the banded form is tested against."""
     ok = freq > 0
     f, a = freq[ok], amp[ok]
-    x = bandwidth * np.log10(f[None, :] / centres[:, None])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        w = (np.sin(x) / x) ** 4
-    w[np.abs(x) < 1e-12] = 1.0
-    w[np.abs(x) > np.pi] = 0.0
+    w = _window(bandwidth * np.log10(f[None, :] / centres[:, None]))
     return (w @ a) / np.maximum(w.sum(axis=1), 1e-300)
 
 

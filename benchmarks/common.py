@@ -52,7 +52,8 @@ def export_commit(commit: str, where: Path, paths: tuple[str, ...] = ()) -> Path
     worktree list is left alone."""
     from urmx.config import project_root
 
-    if not (where / "urmx" / "kernel.py").exists():
+    # (the kernel is urmx/kernel.py up to 0.2.0, the package urmx/kernel/ after)
+    if not any((where / "urmx" / k).exists() for k in ("kernel.py", "kernel/__init__.py")):
         where.mkdir(parents=True, exist_ok=True)
         archive = subprocess.run(["git", "archive", commit, *paths], cwd=project_root(),
                                  check=True, capture_output=True).stdout

@@ -83,7 +83,7 @@ def test_a_worker_with_another_kernel_is_refused_before_any_work(external, clust
     copy = tmp_path / "other"
     shutil.copytree(C.ROOT / "urmx", copy / "urmx",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    kernel = copy / "urmx" / "kernel.py"
+    kernel = copy / "urmx" / "kernel" / "loop.py"
     kernel.write_text(kernel.read_text() + "\n# another kernel: one comment more\n")
     other_hash = subprocess.run(
         [sys.executable, "-c", "import urmx.jitcache; print(urmx.jitcache.SOURCE_HASH)"],

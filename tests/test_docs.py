@@ -185,12 +185,33 @@ def readme_example() -> str:
     return section.split("```python\n", 1)[1].split("```", 1)[0]
 
 
+def layout_mismatch(text: str) -> set[str]:
+    """Folders the README's Layout tree (one line a folder) names that do not exist, or
+    packages of urmx/ it does not name, or folders it names twice."""
+    layout = text.split("## Layout", 1)[1].split("\n## ", 1)[0]
+    lines = re.findall(r"^    ([\w/]+/) ", layout, re.M)
+    packages = {f"urmx/{p.name}/" for p in (ROOT / "urmx").iterdir()
+                if (p / "__init__.py").is_file()}
+    named = {x for x in lines if x.startswith("urmx/") and x != "urmx/"}
+    twice = {x for x in lines if lines.count(x) > 1}
+    return (named ^ packages) | {x for x in lines if not (ROOT / x).is_dir()} | twice
+
+
+def test_the_layout_check_fails_on_a_stale_tree():
+    good = readme()
+    assert layout_mismatch(good.replace("    urmx/kernel/ ", "    urmx/kern/ ")) == {
+        "urmx/kern/", "urmx/kernel/"}
+    assert layout_mismatch(good.replace("    urmx/plot/ ", "    urmx/paper/ ")) == {
+        "urmx/plot/", "urmx/paper/"}
+
+
 def test_the_readme_fits_on_a_screen_and_has_its_parts():
     text = readme()
     assert len(text.splitlines()) <= 200
     headings = re.findall(r"^## (.+)$", text, re.M)
     assert headings == ["Quick start", "Install", "A ten-line example", "What is in the box",
-                        "Tests", "How to cite", "Licence"]
+                        "Layout", "Tests", "How to cite", "Licence"]
+    assert layout_mismatch(text) == set()
     assert re.search(r'<img src="reports/[\w/]+\.png"', text)
     # every relative link of the README and of the docs pages leads to a file of the repository
     for path in [ROOT / "README.md", *DOCS.rglob("*.md")]:

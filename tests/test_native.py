@@ -83,11 +83,11 @@ def test_a_wrong_array_is_refused_before_the_loop_sees_it():
         tab.args.put("ag", np.zeros(5, np.int64))
     with pytest.raises(ValueError, match="contiguous: False, aligned: True"):
         tab.args.put("ag", np.zeros(10)[::2])
-    names = [x[0] for x in kernel.ARRAYS]
+    names = [x[0] for x in kernel.loop.ARRAYS]
     arrays = {name: tab.args[name] for name in names}
     del arrays["KP"]
     with pytest.raises(ValueError, match=r"missing: \['KP'\]"):
-        native.Args(kernel.ARRAYS, arrays, 0.01, kernel.LOOP)
+        native.Args(kernel.loop.ARRAYS, arrays, 0.01, kernel.loop.LOOP)
     # the refused arrays left the block as it was: an analysis still runs correctly
     ag = np.sin(np.arange(200) * 0.1)
     assert _same(kernel.run(wall, ag, 0.01), kernel.run(wall, ag.copy(), 0.01))

@@ -54,12 +54,16 @@ def test_archives_of_the_tests_studies_are_unchanged(name, tmp_path):
 
 @pytest.mark.parametrize("name", P.REAL_RUNS)
 def test_archives_on_the_real_kernel_are_unchanged(name, records_dir, tmp_path):
+    """Run whenever the records' samples are those of the pin. A changed kernel source hash
+    is no reason to skip: it changes with the kernel's files (the split into urmx/kernel/
+    of issue 35) and with the numba, llvmlite and Python versions, while the results must
+    not; a kernel that changes results on purpose is pinned again with
+    ``python -m tests.fixtures.pinned``."""
     inputs = json.loads(P.REAL.read_text())[name]
     now = P.real_inputs(name, tmp_path)
-    if now != inputs:
-        pytest.skip(f"{name}: the kernel's sources or the records' samples differ from those "
-                    "the pinned archive was computed with; pin again with "
-                    "`python -m tests.fixtures.pinned`")
+    if now["records"] != inputs["records"]:
+        pytest.skip(f"{name}: the records' samples differ from those the pinned archive was "
+                    "computed with; pin again with `python -m tests.fixtures.pinned`")
     ds = P.run_real(name, tmp_path)
     pinned = urmx.open_study(P.HERE / f"{name}.nc").load()
     xr.testing.assert_identical(P.comparable(ds), P.comparable(pinned))

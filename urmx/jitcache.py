@@ -6,7 +6,7 @@
   native object (:mod:`urmx.native`) never imports numba at all (about 0.35 s of imports
   and 0.4 s of numba's own set-up when it loads a cached function).
 * **Never stale.** numba keys a cached function on its own file only: a compiled function
-  of ``kernel.py`` that calls a compiled function of ``model.py`` keeps running the old code
+  of ``kernel/loop.py`` that calls a compiled function of ``model.py`` keeps running the old code
   from disk after ``model.py`` changes. Here every compiled urmx function (numba's cache
   and the kernel's native object) is cached in a folder named by a hash of the contents of
   *all* urmx modules with compiled code (and the numba, llvmlite and Python versions), and
@@ -30,8 +30,10 @@ import threading
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-# every urmx module that defines compiled (numba) functions
-COMPILED_MODULES = ("jitcache.py", "model.py", "kernel.py", "native.py")
+# every urmx module that defines compiled (numba) functions, and the kernel's other modules
+# (its tables and checks shape every result the compiled loop gives)
+COMPILED_MODULES = ("jitcache.py", "model.py", "kernel/__init__.py", "kernel/checks.py",
+                    "kernel/loop.py", "kernel/tables.py", "native.py")
 
 
 def _version_stamp(package: str) -> bytes:

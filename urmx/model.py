@@ -126,6 +126,35 @@ def _is_rigid(value: Any) -> bool:
     return isinstance(value, str) and value.strip().lower() == RIGID
 
 
+def _building_number(name: str, value: Any, zero: bool = False) -> float:
+    """A building term of `Wall.in_building` as a float: a finite positive number (or
+    non-negative with `zero`), else an InputError naming it."""
+    ok = isinstance(value, (int, float, np.integer, np.floating)) \
+        and not isinstance(value, bool) and math.isfinite(value) \
+        and (value >= 0.0 if zero else value > 0.0)
+    if not ok:
+        sign = "non-negative" if zero else "positive"
+        raise InputError(f"Wall.in_building {name}={value!r} must be a {sign} number")
+    return float(value)
+
+
+def _diaphragm_spring(stiffness: Any, frequency: Any, diaphragm_mass: float, wall_mass: float,
+                      allow_unusual: bool) -> float | str:
+    """The diaphragm's stiffness for `Wall.in_building`: as given (rigid for "rigid"), or
+    from its frequency as an SDOF of the diaphragm mass plus half the wall's (Table IV
+    footnote), refused above `MAX_DIAPHRAGM_FREQUENCY` unless allowed. [N m-1]"""
+    if frequency is None:
+        return RIGID if _is_rigid(stiffness) else stiffness
+    f = _building_number("diaphragm_frequency", frequency)
+    if f > MAX_DIAPHRAGM_FREQUENCY and not (allow_unusual or _ALLOW_UNUSUAL.get()):
+        raise InputError(
+            f"Wall.in_building diaphragm_frequency={f:g} Hz lies above the "
+            f"{MAX_DIAPHRAGM_FREQUENCY:g} Hz a flexible timber diaphragm can have: "
+            'for a support that stiff use a rigid one (diaphragm_stiffness = "rigid"),'
+            " or pass allow_unusual=True (--allow-unusual) to run it on purpose")
+    return (2.0 * math.pi * f) ** 2 * (diaphragm_mass + 0.5 * wall_mass)
+
+
 @dataclass(frozen=True)
 class Wall:
     """One cracked URM wall and its bottom and top supports (MODEL.md sections 1-3).
@@ -362,15 +391,7 @@ class Wall:
             Bitwise the wall the catalog builds for a parametric wall on a diaphragm
             (`urmx.catalog.Study.wall`).
         """
-        def positive(name: str, value: Any, zero: bool = False) -> float:
-            ok = isinstance(value, (int, float, np.integer, np.floating)) \
-                and not isinstance(value, bool) and math.isfinite(value) \
-                and (value >= 0.0 if zero else value > 0.0)
-            if not ok:
-                sign = "non-negative" if zero else "positive"
-                raise InputError(f"Wall.in_building {name}={value!r} must be a {sign} number")
-            return float(value)
-
+        positive = _building_number
         density = positive("density", density)
         wall_length = positive("wall_length", wall_length)
         diaphragm_weight = positive("diaphragm_weight", diaphragm_weight, zero=True)
@@ -386,19 +407,8 @@ class Wall:
         # Eq. 7: the one formula the catalog's building uses too
         mass = effective_wall_mass(density, thickness, height, wall_length)
         md = effective_diaphragm_mass(diaphragm_weight, plan_area)
-        if diaphragm_frequency is not None:
-            f = positive("diaphragm_frequency", diaphragm_frequency)
-            if f > MAX_DIAPHRAGM_FREQUENCY and not (allow_unusual or _ALLOW_UNUSUAL.get()):
-                raise InputError(
-                    f"Wall.in_building diaphragm_frequency={f:g} Hz lies above the "
-                    f"{MAX_DIAPHRAGM_FREQUENCY:g} Hz a flexible timber diaphragm can have: "
-                    'for a support that stiff use a rigid one (diaphragm_stiffness = "rigid"),'
-                    " or pass allow_unusual=True (--allow-unusual) to run it on purpose")
-            k: float | str = (2.0 * math.pi * f) ** 2 * (md + 0.5 * mass)
-        elif _is_rigid(diaphragm_stiffness):
-            k = RIGID
-        else:
-            k = diaphragm_stiffness
+        k = _diaphragm_spring(diaphragm_stiffness, diaphragm_frequency, md, mass,
+                              allow_unusual)
         zeta = 0.0 if _is_rigid(k) else damping
         bottom = (dict(bottom_stiffness=k, bottom_mass=md, bottom_damping=zeta)
                   if supports == "both" else

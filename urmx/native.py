@@ -1,9 +1,9 @@
 """The kernel's integration loop as native code: compiled once by numba, loaded in ms.
 
-numba compiles the loop (:func:`urmx.kernel._march`, 15 arguments, 51 arrays in all) as
+numba compiles the loop (:func:`urmx.kernel.loop._march`, 15 arguments, 51 arrays in all) as
 usual. A small LLVM function, ``urmx_march_native(ret, exc, iv, fv)``, is then added to
 its module: it reads the loop's arguments from two blocks (an int64 block with the address
-and shape of each array of ``urmx.kernel.ARRAYS``, one slot of ``SLOT`` entries each,
+and shape of each array of ``urmx.kernel.loop.ARRAYS``, one slot of ``SLOT`` entries each,
 followed by the integer arguments; a float64 block with the real ones), passes them as
 numba passes arguments (an array as meminfo, parent, size, item size, data, shape and
 strides) and calls the loop. The module (the loop as numba optimised it, untouched) and
@@ -263,77 +263,23 @@ def _shim(layout, loop: Loop, compiled) -> str:
     """LLVM IR of ``urmx_march_native(iv, fv)``: the loop's arguments read from the blocks
     and passed as numba passes them (an array as meminfo, parent, size, item size, data,
     shape and strides), the loop called, its result returned (-1000 on an error status)."""
-    index = {x[0]: i for i, x in enumerate(layout)}
-    body, values = [], []
-    count = [0]
-
-    def tmp():
-        count[0] += 1
-        return f"%t{count[0]}"
-
-    def load(block, kind, k):
-        ptr, val = tmp(), tmp()
-        body.append(f"  {ptr} = getelementptr {kind}, ptr %{block}, i64 {k}")
-        body.append(f"  {val} = load {kind}, ptr {ptr}")
-        return val
-
-    def array(name):
-        _, dtype, ndim = layout[index[name]]
-        at = index[name] * SLOT
-        size = _DTYPES[dtype][1]
-        address = load("iv", "i64", at)
-        dims = [load("iv", "i64", at + 1 + j) for j in range(ndim)]
-        nitems = dims[0]
-        for d in dims[1:]:
-            prod = tmp()
-            body.append(f"  {prod} = mul i64 {nitems}, {d}")
-            nitems = prod
-        data = tmp()
-        body.append(f"  {data} = inttoptr i64 {address} to ptr")
-        strides = [str(size)]
-        for j in range(ndim - 1, 0, -1):
-            st = tmp()
-            body.append(f"  {st} = mul i64 {strides[0]}, {dims[j]}")
-            strides.insert(0, st)
-        values.extend([("ptr", "null"), ("ptr", "null"), ("i64", nitems),
-                       ("i64", str(size)), ("ptr", data)])
-        values.extend(("i64", d) for d in dims)
-        values.extend(("i64", st) for st in strides)
-
-    def walk(p):
-        if isinstance(p, tuple):
-            for q in p:
-                walk(q)
-        elif p in index:
-            array(p)
-        elif p in loop.ints:
-            v = load("iv", "i64", len(layout) * SLOT + loop.ints.index(p))
-            if p in loop.flags:  # a boolean: numba passes it as a byte
-                b, byte = tmp(), tmp()
-                body.append(f"  {b} = icmp ne i64 {v}, 0")
-                body.append(f"  {byte} = zext i1 {b} to i8")
-                values.append(("i8", byte))
-            else:
-                values.append(("i64", v))
-        else:
-            values.append(("double", load("fv", "double", loop.reals.index(p))))
-
+    ir = _ShimBody(layout, loop)
     for p in loop.params:
-        walk(p)
+        ir.walk(p)
     expected = [str(a.type) for a in compiled.arguments][2:]
-    got = [t for t, _ in values]
+    got = [t for t, _ in ir.values]
     if got != expected:  # numba passes arguments otherwise than this shim assumes
         first = next((i for i, (a, b) in enumerate(zip(got, expected, strict=False))
                       if a != b), min(len(got), len(expected)))
         raise RuntimeError(f"the loop's native signature differs from the shim's at "
                            f"parameter {first} ({len(expected)} parameters, {len(got)} "
                            "made)")
-    args = ", ".join(f"{t} {v}" for t, v in values)
+    args = ", ".join(f"{t} {v}" for t, v in ir.values)
     return "\n".join([
         f"declare i32 @\"{compiled.name}\"(ptr, ptr, {', '.join(expected)})",
         f"define i64 @{SYMBOL}(ptr %ret, ptr %exc, ptr %iv, ptr %fv) {{",
         "entry:",
-        *body,
+        *ir.body,
         f"  %status = call i32 @\"{compiled.name}\"(ptr %ret, ptr %exc, {args})",
         "  %value = load i64, ptr %ret",
         "  %ok = icmp eq i32 %status, 0",
@@ -341,6 +287,73 @@ def _shim(layout, loop: Loop, compiled) -> str:
         "  ret i64 %out",
         "}",
     ]) + "\n"
+
+
+class _ShimBody:
+    """The shim's body as it is written: its instructions (``body``) and the (type, value)
+    of each argument of the loop's call (``values``), made parameter by parameter."""
+
+    def __init__(self, layout, loop: Loop):
+        self.layout, self.loop = layout, loop
+        self.index = {x[0]: i for i, x in enumerate(layout)}
+        self.body: list[str] = []
+        self.values: list[tuple[str, str]] = []
+        self.count = 0
+
+    def tmp(self) -> str:
+        self.count += 1
+        return f"%t{self.count}"
+
+    def load(self, block: str, kind: str, k) -> str:
+        ptr, val = self.tmp(), self.tmp()
+        self.body.append(f"  {ptr} = getelementptr {kind}, ptr %{block}, i64 {k}")
+        self.body.append(f"  {val} = load {kind}, ptr {ptr}")
+        return val
+
+    def array(self, name: str) -> None:
+        """An array argument: its address, shape and strides read from the int block."""
+        _, dtype, ndim = self.layout[self.index[name]]
+        at = self.index[name] * SLOT
+        size = _DTYPES[dtype][1]
+        address = self.load("iv", "i64", at)
+        dims = [self.load("iv", "i64", at + 1 + j) for j in range(ndim)]
+        nitems = dims[0]
+        for d in dims[1:]:
+            prod = self.tmp()
+            self.body.append(f"  {prod} = mul i64 {nitems}, {d}")
+            nitems = prod
+        data = self.tmp()
+        self.body.append(f"  {data} = inttoptr i64 {address} to ptr")
+        strides = [str(size)]
+        for j in range(ndim - 1, 0, -1):
+            st = self.tmp()
+            self.body.append(f"  {st} = mul i64 {strides[0]}, {dims[j]}")
+            strides.insert(0, st)
+        self.values.extend([("ptr", "null"), ("ptr", "null"), ("i64", nitems),
+                            ("i64", str(size)), ("ptr", data)])
+        self.values.extend(("i64", d) for d in dims)
+        self.values.extend(("i64", st) for st in strides)
+
+    def walk(self, p) -> None:
+        """The argument(s) of loop parameter `p` (a tuple of them, an array, an int or a
+        flag, a real)."""
+        loop, layout = self.loop, self.layout
+        if isinstance(p, tuple):
+            for q in p:
+                self.walk(q)
+        elif p in self.index:
+            self.array(p)
+        elif p in loop.ints:
+            v = self.load("iv", "i64", len(layout) * SLOT + loop.ints.index(p))
+            if p in loop.flags:  # a boolean: numba passes it as a byte
+                b, byte = self.tmp(), self.tmp()
+                self.body.append(f"  {b} = icmp ne i64 {v}, 0")
+                self.body.append(f"  {byte} = zext i1 {b} to i8")
+                self.values.append(("i8", byte))
+            else:
+                self.values.append(("i64", v))
+        else:
+            self.values.append(("double", self.load("fv", "double", loop.reals.index(p))))
 
 
 def _store(data: bytes, symbol: str, layout, meta: Path) -> None:

@@ -11,8 +11,8 @@ through zero after it has been positive (a function at zero after an event, an i
 a release, may come back at once, and an even number of crossings inside one step leaves
 the signs at its ends alike), and every change of sign of a peak output's rate, each
 located by brentq on the dense output. What an event does is decided by the same
-functions as in the exact kernel (:func:`urmx.kernel.handle_event`,
-:func:`urmx.kernel.active_events`, compiled with Python wrappers as ``*_py``), on the same
+functions as in the exact kernel (:func:`urmx.kernel.loop.handle_event`,
+:func:`urmx.kernel.loop.active_events`, compiled with Python wrappers as ``*_py``), on the same
 piece matrices (:func:`urmx.kernel.tables`), so the two solvers differ only in how they
 integrate and search.
 """
@@ -25,8 +25,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from . import kernel as K
+from . import kernel
 from .errors import InputError
+from .kernel import loop as K
 
 #: samples of the dense output per solver step, and geometric ones after a piece's start
 SAMPLES, GEOMETRIC = 16, 40
@@ -136,7 +137,7 @@ def _extrema(t, val, der, peaks, at):
 
 
 def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
-        window=K.WINDOW, t_rest=K.T_REST, rtol=1e-10, atol=None, method="DOP853",
+        window=K.WINDOW, t_rest=kernel.T_REST, rtol=1e-10, atol=None, method="DOP853",
         max_step=None, history=False) -> dict:
     """One analysis with scipy's ``solve_ivp`` (same outputs as :func:`urmx.kernel.run`).
 
@@ -154,7 +155,7 @@ def run(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", ta
         Largest solver step; default ``dt/8`` (with SAMPLES samples a step, events and
         extrema are searched at least every dt/128). [s]
     """
-    ag, dt, ntail, law = K.check_inputs(wall, ground_acceleration, dt, scale, cor, impact,
+    ag, dt, ntail, law = kernel.check_inputs(wall, ground_acceleration, dt, scale, cor, impact,
                                         tail, window, t_rest)
     if not (rtol and 0.0 < float(rtol) < 1.0):
         raise InputError(f"rtol={rtol!r} must lie in (0, 1)")
@@ -183,7 +184,7 @@ class _Analysis:
     ends (``status``)."""
 
     def __init__(self, wall, ag, dt, ntail, history, solver, *, t_rest, cor, law, window):
-        self.tab = tab = K.tables(wall, dt)
+        self.tab = tab = kernel.tables(wall, dt)
         self.GL, self.GN, self.GX, self.GMI, self.GROT, self.GNN, self.GTR = tab.geo
         self.ag, self.dt, self.N, self.history, self.solver = ag, dt, ag.size, history, solver
         self.nsteps = self.N - 1 + ntail
@@ -376,16 +377,16 @@ class _Analysis:
         outs[K.O_DURATION] = duration
         outs[K.O_BASE_IMP], outs[K.O_CRACK_IMP], outs[K.O_HOLDS] = self.counts
         outs[K.O_EVENTS] = self.events
-        res = K.scalars(self.peaks, outs, self.status, self.tab.P)
+        res = kernel.scalars(self.peaks, outs, self.status, self.tab.P)
         if self.history:
-            res["history"] = K.history_dict(self.hist, self.dt, self.tab.nfull)
+            res["history"] = kernel.history_dict(self.hist, self.dt, self.tab.nfull)
         res["event_log"] = np.array([row + (0,) * (4 - len(row))
                                      for row in self.log]).reshape(-1, 4)
         return res
 
 
 def _pad(x):
-    """A vector padded with zeros to urmx.kernel.NP coordinates."""
+    """A vector padded with zeros to urmx.kernel.loop.NP coordinates."""
     out = np.zeros(K.NP)
     out[:x.size] = x
     return out

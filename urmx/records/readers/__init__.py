@@ -36,10 +36,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..config import UrmxWarning
-from ..errors import MissingFileError, numbers_argument, path_argument
-from .checks import counts_problem, motion_problem, quantity_problems, unit_problem
-from .errors import (
+from ...config import UrmxWarning
+from ...errors import MissingFileError, numbers_argument, path_argument
+from ..checks import counts_problem, motion_problem, quantity_problems, unit_problem
+from ..errors import (
     ChannelError,
     MissingTimeStepError,
     NonFiniteError,

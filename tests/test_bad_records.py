@@ -21,7 +21,7 @@ import pytest
 import urmx.records as R
 from urmx import UrmxError
 from urmx.cli import main
-from urmx.records import readers
+from urmx.records.readers import detect as readers  # where _detect_obspy and SNIFF_BYTES live
 
 G_N = 9.80665
 AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"

@@ -332,7 +332,7 @@ def _pickle_payload(marker: Path) -> bytes:
 
 def test_pickle_record_never_runs(tmp_path, capsys, monkeypatch):
     from urmx.cli import main
-    from urmx.records import readers
+    from urmx.records.readers import detect as readers  # where _looks_like_pickle lives
 
     marker = tmp_path / "marker"
     evil = tmp_path / "record.dat"

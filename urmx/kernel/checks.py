@@ -12,12 +12,17 @@ from ..model import T_REST, Wall
 from .loop import DT_RANGE, LAWS, WINDOW
 
 
+def _float(name: str, value, what: str) -> float:
+    """`value` as a float, or an InputError saying that argument `name` must be `what`."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}={value!r} must be {what}") from None
+
+
 def check_t_rest(t_rest) -> float:
     """`t_rest` as a float, or an InputError naming it (a positive, finite time)."""
-    try:
-        value = float(t_rest)
-    except (TypeError, ValueError):
-        raise InputError(f"t_rest={t_rest!r} must be a number of seconds") from None
+    value = _float("t_rest", t_rest, "a number of seconds")
     if not (math.isfinite(value) and value > 0.0):
         raise InputError(f"t_rest={t_rest!r} must be a positive, finite time in seconds "
                          f"(v_rest = g_open/t_rest, MODEL.md section 4)")
@@ -30,10 +35,7 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
     check_t_rest(t_rest)
     if not isinstance(wall, Wall):
         raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
-    try:
-        dt = float(dt)
-    except (TypeError, ValueError):
-        raise InputError(f"dt={dt!r} must be a number of seconds") from None
+    dt = _float("dt", dt, "a number of seconds")
     if not (math.isfinite(dt) and dt > 0.0):
         raise InputError(f"dt={dt!r} must be a positive, finite time step in seconds")
     if not DT_RANGE[0] <= dt <= DT_RANGE[1]:
@@ -48,25 +50,16 @@ def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window
         i = int(np.flatnonzero(bad)[0])
         raise InputError(f"ground_acceleration has {int(bad.sum())} NaN/inf sample(s), the "
                          f"first at index {i} (t = {i * dt:g} s)")
-    try:
-        scale = float(scale)
-    except (TypeError, ValueError):
-        raise InputError(f"scale={scale!r} must be a number") from None
+    scale = _float("scale", scale, "a number")
     if not math.isfinite(scale):
         raise InputError(f"scale={scale!r} must be finite")
-    try:
-        cor = float(cor)
-    except (TypeError, ValueError):
-        raise InputError(f"cor={cor!r} must be a number in (0, 1]") from None
+    cor = _float("cor", cor, "a number in (0, 1]")
     if not (0.0 < cor <= 1.0):
         raise InputError(f"cor={cor!r} must lie in (0, 1] (coefficient of restitution)")
     if impact not in LAWS:
         raise InputError(f"impact={impact!r} is not an impact law; use one of "
                          f"{', '.join(map(repr, LAWS))}")
-    try:
-        tail = float(tail)
-    except (TypeError, ValueError):
-        raise InputError(f"tail={tail!r} must be a duration in seconds") from None
+    tail = _float("tail", tail, "a duration in seconds")
     if not (math.isfinite(tail) and tail >= 0.0):
         raise InputError(f"tail={tail!r} must be a non-negative duration in seconds")
     window = float(window)

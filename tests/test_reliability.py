@@ -48,6 +48,7 @@ from .helpers.gaps_study import (
     many_acceleration,
     slow_kernel,
 )
+from .helpers.runs import Interrupt
 
 
 @pytest.fixture
@@ -500,10 +501,6 @@ def test_foreign_and_damaged_ida_parts_are_recomputed(gaps_records, ida_gaps, tm
         in err.getvalue()
     assert "cells/s" in err.getvalue()  # progress counts collapse capacities
     assert not parts.exists()
-
-
-class Interrupt(Exception):
-    """Stands for Ctrl-C (or a killed run) partway through a study."""
 
 
 @pytest.mark.parametrize("kind", ["grid", "ida"])

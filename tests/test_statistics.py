@@ -256,7 +256,7 @@ def test_a_fragility_in_another_measure_is_refused_in_one_line(capsys):
     assert f"{100 * r.extrapolated_share:.3g} %" in out
 
 
-def test_urmx_risk_reads_an_openquake_curve_for_an_archive(ida_records, make_study,  # noqa: F811
+def test_urmx_risk_reads_an_openquake_curve_for_an_archive(ida_records, make_study,
                                                            tmp_path, capsys):
     ds = _run(make_study, REP_IDA, "rep.toml", kernel=stiff_kernel)
     archive = tmp_path / "rep.nc"
@@ -271,7 +271,7 @@ def test_urmx_risk_reads_an_openquake_curve_for_an_archive(ida_records, make_stu
     assert float(c.band_share.sum()) == pytest.approx(1.0, abs=1e-9)
 
 
-def test_the_sa_avg_curve_is_the_pga_curve_scaled_by_the_spectrum_shape(ida_records,  # noqa: F811
+def test_the_sa_avg_curve_is_the_pga_curve_scaled_by_the_spectrum_shape(ida_records,
                                                                         make_study):
     """NZS 1170.5 scales every ordinate by R: the sa_avg curve's intensity at a return
     period is the spectrum's geometric mean over the periods over its PGA times the PGA
@@ -334,7 +334,7 @@ def test_variance_shares_of_a_linear_model_and_their_rank_fallback():
     assert rz["r2"] < 0.7 and rz["ranks"] and rz["r2_ranks"] > rz["r2"]
 
 
-def test_capacities_in_sa_at_a_period_come_from_the_records(ida_records,  # noqa: F811
+def test_capacities_in_sa_at_a_period_come_from_the_records(ida_records,
                                                             make_study):
     """sa(T): the scale factor at collapse times the record's 5 %-damped Sa at T as
     analysed (its scale factor: 2 on "shake"); a measure urmx cannot compute is refused."""

@@ -13,10 +13,7 @@ import numpy as np
 
 from urmx import variables
 
-
-class Interrupt(Exception):
-    """Stands for Ctrl-C or a killed worker in the resume test."""
-
+from .runs import Interrupt
 
 DT = 0.01
 # two synthetic records: "quake" (PGA 2.0 m s-2, 200 samples), "shake" (PGA 3.0, 150 samples)

@@ -12,16 +12,14 @@ import numpy as np
 
 from urmx import study as st
 
+from .runs import Interrupt
+
 DT = 0.01
 ACC = {"quake": np.r_[np.zeros(20), 2.0 * np.sin(np.linspace(0, 6 * np.pi, 180))],
        "shake": np.r_[np.zeros(10), 3.0, -1.0, np.zeros(138)]}
 SCALE = {"quake": 1.0, "shake": 2.0}
 CALLS: list = []
 FAIL_AT: list[int] = []
-
-
-class Interrupt(Exception):
-    """Stands for Ctrl-C in the resume test."""
 
 
 def study_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):

@@ -16,10 +16,7 @@ import xarray as xr
 from urmx import study as st
 
 from .grid_study import fake_kernel
-
-
-class Interrupt(Exception):
-    """Stands for Ctrl-C partway through a run."""
+from .runs import Interrupt
 
 
 def counting(calls: list, stop: int | None = None):

@@ -1,6 +1,6 @@
-"""Helpers of tests that run whole studies or read the project: `same_run` (two runs'
-archives equal but for their start times) and `fallback_version` (pyproject.toml's
-setuptools-scm fallback)."""
+"""Helpers of tests that run whole studies or read the project: `Interrupt` (what a stand-in
+kernel raises for Ctrl-C), `same_run` (two runs' archives equal but for their start times)
+and `fallback_version` (pyproject.toml's setuptools-scm fallback)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,11 @@ from pathlib import Path
 import xarray as xr
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+class Interrupt(Exception):
+    """Stands for Ctrl-C, a killed run or a lost worker partway through a study (raised by
+    the stand-in kernels, caught by the tests)."""
 
 
 def same_run(a: xr.Dataset, b: xr.Dataset) -> None:

@@ -966,6 +966,7 @@ def scan() -> None:
             r = kernel.run(**_pulse(seed, sup))
             print("pulse", seed, sup, r["holds"], r["crack_impacts"], r["base_impacts"])
 
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["scan"]:
         scan()

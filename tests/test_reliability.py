@@ -326,8 +326,6 @@ def test_header_dt_not_positive_is_refused(tmp_path, dt_text):
 
 # ---- a lost worker -----------------------------------------------------------------------
 
-
-
 @pytest.fixture
 def many_records(use_records):
     acc = many_acceleration()

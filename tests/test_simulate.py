@@ -367,6 +367,8 @@ def test_cli_errors_one_line(capsys, tmp_path, record5s, argv, message):
         assert str(bad) in err
 
 
+# ---- t_rest, the rest time of held joints (issue 32) ----------------------------------
+
 def test_simulate_passes_and_records_t_rest():
     case = c9_chatter()
     ds = urmx.simulate(case.pop("wall"), case.pop("ground_acceleration"), case.pop("dt"),

@@ -78,8 +78,6 @@ max_intensity = 100.0
 """
 
 
-
-
 def stiff_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
     """As `study_kernel`, with the threshold times (k_top / 815 kN/m)**0.1: D4 is 1.478
     times as strong as D1 for every wall and record."""

@@ -76,8 +76,6 @@ def own_grid(make_study, walls=("s08", "s18"), records=("rec1", "rec2", "rec3"),
                       f"{len(records)}-{len(cor)}.toml")
 
 
-
-
 def own_record_folder(tmp_path: Path) -> Path:
     """A records folder of four AT2 files ``rec1`` ... ``rec4`` (peaks 0.1 ... 0.4 g) and its
     manifest, in `tmp_path` (the ``own_records`` fixture, conftest.py)."""

@@ -87,3 +87,41 @@ def use_records(monkeypatch):
         monkeypatch.setattr(urmx.records, "load", load, raising=False)
 
     return use
+
+
+@pytest.fixture
+def own_records(tmp_path) -> Path:
+    """A records folder of four synthetic AT2 records ``rec1`` ... ``rec4`` and their
+    manifest (`tests.helpers.own_records.own_record_folder`)."""
+    from .helpers.own_records import own_record_folder
+
+    return own_record_folder(tmp_path)
+
+
+@pytest.fixture
+def grid_records(use_records):
+    """The small grid study's two synthetic records in place of the manifest
+    (`tests.helpers.grid_study`), with its stand-in kernel's call log emptied."""
+    from .helpers import grid_study as G
+
+    use_records(G.ACC, G.SCALE, G.DT)
+    G.CALLS.clear()
+
+
+@pytest.fixture
+def gaps_records(use_records):
+    """The "gaps" study's two synthetic pulse records in place of the manifest
+    (`tests.helpers.gaps_study`)."""
+    from .helpers import gaps_study as G
+
+    use_records(G.ACC, G.SCALE, G.DT)
+
+
+@pytest.fixture
+def ida_records(use_records):
+    """The IDA stand-ins' two synthetic records in place of the manifest
+    (`tests.helpers.ida_study`), with `study_kernel`'s call log emptied."""
+    from .helpers import ida_study as G
+
+    use_records(G.ACC, G.SCALE, G.DT)
+    G.CALLS.clear()

@@ -17,7 +17,6 @@ import io
 import os
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -34,8 +33,19 @@ from urmx.study.file import load_study
 from urmx.study.limits import SizeError
 
 from .fixtures.signals import killed_after_parts
-from .test_kinds import _same
-from .test_study import fake_kernel
+from .helpers.grid_study import fake_kernel
+from .helpers.own_records import (
+    Interrupt,
+    counting,
+    index_folder,
+    own_grid,
+    quiet_run,
+    write_at2,
+)
+from .helpers.runs import same_run
+from .helpers.synthetic import DT, PULSE, PULSE_SCALE
+from .helpers.synthetic import SWEEP_ACC as ACC
+from .helpers.synthetic import SWEEP_SCALE as SCALE
 
 # ---- a vectorised stand-in kind over cor x scale ------------------------------------------
 
@@ -73,9 +83,6 @@ SWEEP = kinds.register(kinds.Kind(name="sweep", table="sweep", unit="cells",
                                   outputs=("value",), parse=sweep_parse, task=sweep_task,
                                   run=sweep_run, assemble=sweep_assemble))
 
-DT = 0.01
-ACC = {"quake": np.r_[np.zeros(5), 2.0, -1.0, np.zeros(43)]}
-SCALE = {"quake": 1.0}
 # 1 wall x 1 diaphragm x 1 record x 1000 cor x 1000 scale = 10^6 cells (on main at 7ab99c0
 # one batch, whatever --batch-size)
 MILLION = """\
@@ -115,7 +122,7 @@ def test_a_million_cells_are_cut_into_many_batches(million):
 RUN = """\
 import sys
 import urmx
-import tests.test_cells as T
+import {module} as T
 from tests.fixtures.pinned import served
 
 with served(T.{acc}, T.{scale}, {dt}):
@@ -127,8 +134,8 @@ with served(T.{acc}, T.{scale}, {dt}):
 def _child(acc: str = "ACC", scale: str = "SCALE", dt: float = DT, kernel: str = "") -> str:
     """The script of a child process that runs a study on in-memory records (this module's
     `acc` and `scale`), with ``kernel=T.<kernel>`` when given."""
-    return RUN.format(acc=acc, scale=scale, dt=dt, kernel=f", kernel=T.{kernel}" if kernel
-                      else "")
+    return RUN.format(module=__name__, acc=acc, scale=scale, dt=dt,
+                      kernel=f", kernel=T.{kernel}" if kernel else "")
 
 
 def _values(ds: xr.Dataset) -> np.ndarray:
@@ -194,8 +201,6 @@ def test_a_million_analysis_cor_scale_grid_is_cut_into_many_batches(make_study, 
 
 REAL_SLEEP = "URMX_REAL_SLEEP"  # seconds the real-kernel stand-in waits per analysis
 REAL_CALLS: list = []
-PULSE = {"pulse": 3.0 * np.sin(2 * np.pi * 2.0 * np.arange(150) * 0.01)}
-PULSE_SCALE = {"pulse": 1.0}
 REAL_GRID = """\
 [study]
 name = "real-cor-scale"
@@ -272,25 +277,10 @@ pairs = {s08 = ["quake", "shake"], s18 = ["shake"]}
 GRID_RUNS = (2 + 1) * 2 * 10 * 3  # (wall, record) pairs x diaphragms x cor x scale = 180
 
 
-class Interrupt(Exception):
-    """Stands for Ctrl-C partway through a run."""
-
-
-def _counting(calls: list, stop: int | None = None):
-    def kernel(*args, **kw):
-        if stop is not None and len(calls) == stop:
-            raise Interrupt
-        calls.append(1)
-        return fake_kernel(*args, **kw)
-
-    kernel.__qualname__ = "counting"  # one kernel name (it is part of every cell's key)
-    return kernel
-
-
 @pytest.fixture
 def grid(make_study, use_records):
-    from .test_study import ACC as ACC2
-    from .test_study import SCALE as SCALE2
+    from .helpers.grid_study import ACC as ACC2
+    from .helpers.grid_study import SCALE as SCALE2
 
     use_records(ACC2, SCALE2, DT)
     return make_study(GRID, "grid.toml")
@@ -300,75 +290,30 @@ def grid(make_study, use_records):
 def test_a_grid_resumes_with_another_batch_size_computing_no_finished_cell(grid, tmp_path,
                                                                           first, second):
     calls: list = []
-    reference = st.run_study(grid, kernel=_counting(calls), scheduler="serial",
+    reference = st.run_study(grid, kernel=counting(calls), scheduler="serial",
                              progress=False, batch_size=first)
     assert len(calls) == GRID_RUNS
     calls.clear()
     out = tmp_path / "grid.nc"
     with pytest.raises(Interrupt):
-        st.run_study(grid, out=out, kernel=_counting(calls, 100), scheduler="serial",
+        st.run_study(grid, out=out, kernel=counting(calls, 100), scheduler="serial",
                      progress=False, batch_size=first)
     kept = sum(int(np.load(p)["cell_key"].size)
                for p in (tmp_path / "grid.nc.parts").glob("*.npz"))
     assert 0 < kept <= 100
     calls.clear()
-    ds = st.run_study(grid, out=out, kernel=_counting(calls), scheduler="serial",
+    ds = st.run_study(grid, out=out, kernel=counting(calls), scheduler="serial",
                       progress=False, batch_size=second)
     assert len(calls) == GRID_RUNS - kept  # no finished cell computed again
     assert st.last_run().from_parts == kept and st.last_run().computed == len(calls)
-    _same(ds.load(), reference)
+    same_run(ds.load(), reference)
 
 
 # ---- studies extended: only the new cells are computed ----------------------------------------
 
-def _at2(path: Path, peak: float, n: int = 120) -> None:
-    """A PEER AT2 record: a decaying 2 Hz sine of `peak` g, dt 0.01 s."""
-    t = np.arange(n) * 0.01
-    acc = peak * np.sin(2 * np.pi * 2.0 * t) * np.exp(-t)
-    rows = [" ".join(f"{v: .7E}" for v in acc[i:i + 5]) for i in range(0, n, 5)]
-    path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\nsynthetic test record\n"
-                    "ACCELERATION TIME SERIES IN UNITS OF G\n"
-                    f"NPTS= {n:5d}, DT= .0100 SEC\n" + "\n".join(rows) + "\n")
-
-
-def _index(folder: Path) -> None:
-    from urmx.records.manifest import index, write_manifest
-
-    entries, _ = index(folder, pattern="*.AT2")
-    write_manifest(entries, folder / "manifest.toml")
-
-
-@pytest.fixture
-def own_records(tmp_path):
-    folder = tmp_path / "records"
-    folder.mkdir()
-    for i, peak in enumerate((0.1, 0.2, 0.3, 0.4), 1):
-        _at2(folder / f"rec{i}.AT2", peak)
-    _index(folder)
-    return folder
-
-
-OWN = """\
-[study]
-name = "own"
-walls = {walls}
-diaphragms = ["D1", "D3"]
-supports = "top"
-records = {records}
-cor = {cor}
-"""
-
-
-def _own(make_study, walls=("s08", "s18"), records=("rec1", "rec2", "rec3"), cor=(0.7, 0.8),
-         name="own"):
-    text = OWN.format(walls=list(walls), records=list(records), cor=list(cor))
-    return make_study(text.replace('"own"', f'"{name}"'), f"{name}-{len(walls)}-"
-                      f"{len(records)}-{len(cor)}.toml")
-
-
 def _run_own(path, out, folder, calls, **kw):
     kw.setdefault("progress", False)
-    return st.run_study(path, out=out, records_dir=folder, kernel=_counting(calls),
+    return st.run_study(path, out=out, records_dir=folder, kernel=counting(calls),
                         scheduler="serial", **kw)
 
 
@@ -381,13 +326,13 @@ def test_an_extended_study_computes_only_its_new_cells(make_study, own_records, 
                                                        change, new):
     out = tmp_path / "own.nc"
     calls: list = []
-    first = _run_own(_own(make_study), out, own_records, calls).load()
+    first = _run_own(own_grid(make_study), out, own_records, calls).load()
     assert len(calls) == 2 * 2 * 3 * 2
     calls.clear()
     err = io.StringIO()
     saved, sys.stderr = sys.stderr, err
     try:
-        ds = _run_own(_own(make_study, **change), out, own_records, calls,
+        ds = _run_own(own_grid(make_study, **change), out, own_records, calls,
                       progress=True).load()
     finally:
         sys.stderr = saved
@@ -401,20 +346,9 @@ def test_an_extended_study_computes_only_its_new_cells(make_study, own_records, 
         a, b = np.asarray(first[name].values), np.asarray(old[name].values)
         assert a.tobytes() == b.tobytes(), name
     calls.clear()
-    fresh = st.run_study(_own(make_study, **change), records_dir=own_records,
-                         kernel=_counting(calls), scheduler="serial", progress=False)
-    _same(ds, fresh)
-
-
-def _quiet_run(*args, **kw) -> tuple[xr.Dataset, str]:
-    """`urmx.run_study` with progress on, returning (the archive loaded, what it said)."""
-    err = io.StringIO()
-    saved, sys.stderr = sys.stderr, err
-    try:
-        ds = st.run_study(*args, progress=True, **kw).load()
-    finally:
-        sys.stderr = saved
-    return ds, err.getvalue()
+    fresh = st.run_study(own_grid(make_study, **change), records_dir=own_records,
+                         kernel=counting(calls), scheduler="serial", progress=False)
+    same_run(ds, fresh)
 
 
 def test_own_record_files_and_wall_extended_by_a_fourth_record(tmp_path):
@@ -427,7 +361,7 @@ def test_own_record_files_and_wall_extended_by_a_fourth_record(tmp_path):
     import shutil
 
     from .fixtures.records import record_file
-    from .test_study_files import AT2, OWN, PLAIN, V2A
+    from .helpers.own_files import AT2, OWN_FILES, PLAIN, V2A
 
     data = tmp_path / "data"
     data.mkdir()
@@ -436,16 +370,16 @@ def test_own_record_files_and_wall_extended_by_a_fourth_record(tmp_path):
         src = record_file(rel)
         shutil.copy(src, data / (name or src.name))
     three = tmp_path / "three.toml"
-    three.write_text(OWN, encoding="utf-8")
+    three.write_text(OWN_FILES, encoding="utf-8")
     four = tmp_path / "four.toml"
-    four.write_text(OWN.replace('records = ["gilroy", "wtmc", "mine"]',
+    four.write_text(OWN_FILES.replace('records = ["gilroy", "wtmc", "mine"]',
                                 'records = ["gilroy", "wtmc", "mine", "gil337"]')
                     + '\n[records.gil337]\nfile = "data/RSN763_LOMAP_GIL337.AT2"\n',
                     encoding="utf-8")
     out = tmp_path / "own.nc"
-    first, _ = _quiet_run(three, out=out, scheduler="serial")
+    first, _ = quiet_run(three, out=out, scheduler="serial")
     assert (st.last_run().from_archive, st.last_run().computed) == (0, 6)
-    second, said = _quiet_run(four, out=out, scheduler="serial")
+    second, said = quiet_run(four, out=out, scheduler="serial")
     assert (st.last_run().from_archive, st.last_run().computed) == (6, 2)
     assert "urmx own-files: 6 of 8 analyses reused (0 from parts, 6 from the archive), " \
            "2 to compute" in said
@@ -469,7 +403,7 @@ def test_own_record_files_and_wall_extended_by_a_fourth_record(tmp_path):
     lines = at2.read_text().splitlines(keepends=True)
     lines[1] = lines[1].replace("Loma Prieta", "Loma Prieta (edited)")
     at2.write_text("".join(lines))
-    third, said = _quiet_run(four, out=out, scheduler="serial")
+    third, said = quiet_run(four, out=out, scheduler="serial")
     assert (st.last_run().from_archive, st.last_run().computed) == (6, 2)
     assert "6 of 8 analyses reused (0 from parts, 6 from the archive), 2 to compute" in said
     assert str(third.record_sha256.sel(record="gilroy").values) == \
@@ -480,10 +414,10 @@ def test_own_record_files_and_wall_extended_by_a_fourth_record(tmp_path):
 def test_a_changed_record_file_is_computed_again(make_study, own_records, tmp_path):
     out = tmp_path / "own.nc"
     calls: list = []
-    path = _own(make_study)
+    path = own_grid(make_study)
     _run_own(path, out, own_records, calls)
-    _at2(own_records / "rec2.AT2", 0.25)  # the file changes (and its manifest entry with it)
-    _index(own_records)
+    write_at2(own_records / "rec2.AT2", 0.25)  # the file changes (and its manifest entry with it)
+    index_folder(own_records)
     calls.clear()
     ds = _run_own(path, out, own_records, calls).load()
     assert len(calls) == 2 * 2 * 2  # rec2's cells only
@@ -502,12 +436,12 @@ def test_an_archive_of_another_study_is_refused_then_replaced_with_force(make_st
     replaces it only with force."""
     out = tmp_path / "own.nc"
     calls: list = []
-    _run_own(_own(make_study), out, own_records, calls)
-    renamed = _run_own(_own(make_study, name="renamed"), out, own_records, calls)
+    _run_own(own_grid(make_study), out, own_records, calls)
+    renamed = _run_own(own_grid(make_study, name="renamed"), out, own_records, calls)
     assert renamed.attrs["study_name"] == "renamed" and len(calls) == 24  # none again
     assert st.last_run().from_archive == 24
     before = out.read_bytes()
-    other = _own(make_study, walls=("s14",))
+    other = own_grid(make_study, walls=("s14",))
     calls.clear()
     with pytest.raises(OutputError, match=r"holds study 'renamed' of another definition "
                        r"\(wall s08, s18 there, s14 here\), not study 'own': its cells would "
@@ -521,7 +455,7 @@ def test_an_archive_of_another_study_is_refused_then_replaced_with_force(make_st
     stranger = tmp_path / "data.nc"
     xr.Dataset({"x": ("t", [1.0, 2.0])}).to_netcdf(stranger)
     with pytest.raises(OutputError, match="holds no urmx study archive, not study 'own'"):
-        _run_own(_own(make_study), stranger, own_records, calls)
+        _run_own(own_grid(make_study), stranger, own_records, calls)
 
 
 def test_an_own_study_shrunk_keeps_working_and_says_what_it_leaves_out(
@@ -531,12 +465,12 @@ def test_an_own_study_shrunk_keeps_working_and_says_what_it_leaves_out(
     over and the run says which cells it leaves out."""
     out = tmp_path / "own.nc"
     calls: list = []
-    _run_own(_own(make_study), out, own_records, calls)
+    _run_own(own_grid(make_study), out, own_records, calls)
     calls.clear()
-    ds, said = _quiet_run(_own(make_study, walls=("s18",),
-                               records=("rec1", "rec2", "rec3", "rec4")),
-                          out=out, records_dir=own_records, kernel=_counting(calls),
-                          scheduler="serial")
+    ds, said = quiet_run(own_grid(make_study, walls=("s18",),
+                                  records=("rec1", "rec2", "rec3", "rec4")),
+                         out=out, records_dir=own_records, kernel=counting(calls),
+                         scheduler="serial")
     assert (st.last_run().from_archive, st.last_run().computed) == (12, 4)
     assert list(ds.wall.values) == ["s18"] and len(calls) == 4
     assert f"urmx: study 'own' leaves out wall s08 of the archive {out}: their cells are " \
@@ -548,11 +482,11 @@ def test_parts_of_another_study_are_kept_unless_forced(make_study, own_records, 
     parts = tmp_path / "own.nc.parts"
     calls: list = []
     with pytest.raises(Interrupt):
-        st.run_study(_own(make_study), out=out, records_dir=own_records, batch_size=2,
-                     kernel=_counting(calls, 9), scheduler="serial", progress=False)
+        st.run_study(own_grid(make_study), out=out, records_dir=own_records, batch_size=2,
+                     kernel=counting(calls, 9), scheduler="serial", progress=False)
     kept = sorted(p.name for p in parts.glob("*.npz"))
     assert len(kept) == 4
-    other = _own(make_study, walls=("s14",))  # same name, another definition
+    other = own_grid(make_study, walls=("s14",))  # same name, another definition
     with pytest.raises(RunError, match=r"holds 4 finished part\(s\) of study 'own' of another "
                                        r"definition \(wall s08, s18 there, s14 here\), not of "
                                        r"study 'own'.*--force"):
@@ -573,7 +507,7 @@ def test_the_command_line_refuses_another_study_and_replaces_it_with_force(
     from urmx.cli import main
 
     out = tmp_path / "cli.nc"
-    first, other = _own(make_study), _own(make_study, walls=("s14",), name="another")
+    first, other = own_grid(make_study), own_grid(make_study, walls=("s14",), name="another")
     common = ["--records", str(own_records), "--scheduler", "serial", "--quiet"]
     assert main(["run", str(first), "--out", str(out), *common]) == 0
     capsys.readouterr()
@@ -609,7 +543,7 @@ def test_an_oversize_study_is_refused_before_any_work(grid, make_study, tmp_path
     with pytest.raises(SizeError, match=r"'huge' is too large to start: 225,000,000 cells "
                                         r"\(limit 20,000,000, --max-cells\) and an archive of "
                                         r"about 29\.9 GB \(limit 20 GB, --max-gb\)"):
-        st.run_study(path, out=out, kernel=_counting(calls), scheduler="serial")
+        st.run_study(path, out=out, kernel=counting(calls), scheduler="serial")
     assert calls == [] and not out.exists() and not (tmp_path / "huge.nc.parts").exists()
     assert main(["run", str(path), "--out", str(out)]) == 2
     assert "225,000,000 cells" in capsys.readouterr().err
@@ -617,11 +551,11 @@ def test_an_oversize_study_is_refused_before_any_work(grid, make_study, tmp_path
     # limit, and --max-cells lets it through again
     with pytest.raises(SizeError, match=r"240 cells \(limit 100, --max-cells\).*runs 180 "
                                         "analyses"):
-        st.run_study(grid, kernel=_counting(calls), scheduler="serial", max_cells=100)
+        st.run_study(grid, kernel=counting(calls), scheduler="serial", max_cells=100)
     with pytest.raises(SizeError, match="an archive of about 0.0 GB"):
-        st.run_study(grid, kernel=_counting(calls), scheduler="serial", max_gb=1e-6)
+        st.run_study(grid, kernel=counting(calls), scheduler="serial", max_gb=1e-6)
     assert calls == []
-    st.run_study(grid, kernel=_counting(calls), scheduler="serial", progress=False,
+    st.run_study(grid, kernel=counting(calls), scheduler="serial", progress=False,
                  max_cells=1000)
     assert len(calls) == GRID_RUNS
     assert main(["run", str(grid), "--out", str(tmp_path / "g.nc"), "--max-cells", "100",
@@ -721,9 +655,9 @@ max_intensity = 2.0
 
 def test_an_extended_ida_study_computes_only_its_new_capacities(make_study, use_records,
                                                                 tmp_path):
-    from .test_reliability import ACC as ACC3
-    from .test_reliability import SCALE as SCALE3
-    from .test_reliability import ida_kernel
+    from .helpers.gaps_study import ACC as ACC3
+    from .helpers.gaps_study import SCALE as SCALE3
+    from .helpers.gaps_study import ida_kernel
 
     use_records(ACC3, SCALE3, DT)
     calls: list = []
@@ -751,7 +685,7 @@ def test_an_extended_ida_study_computes_only_its_new_capacities(make_study, use_
     calls.clear()
     fresh = run(["quake", "shake"])
     assert len(calls) == analyses + float(first.analyses.sum())  # the reused analyses
-    _same(ds, fresh)
+    same_run(ds, fresh)
 
 
 HISTORY = """
@@ -767,16 +701,16 @@ def test_kept_histories_are_computed_again_rather_than_taken_from_an_archive(
         make_study, own_records, tmp_path):
     out = tmp_path / "own.nc"
     calls: list = []
-    first = _own(make_study)
+    first = own_grid(make_study)
     first.write_text(first.read_text() + HISTORY)
     _run_own(first, out, own_records, calls)
-    extended = _own(make_study, records=("rec1", "rec2", "rec3", "rec4"))
+    extended = own_grid(make_study, records=("rec1", "rec2", "rec3", "rec4"))
     extended.write_text(extended.read_text() + HISTORY)
     calls.clear()
     ds = _run_own(extended, out, own_records, calls).load()
     assert len(calls) == 8 + 1  # rec4's cells and the one cell whose history is kept
     assert (st.last_run().from_archive, st.last_run().computed) == (23, 9)
     calls.clear()
-    _same(ds, st.run_study(extended, records_dir=own_records, kernel=_counting(calls),
+    same_run(ds, st.run_study(extended, records_dir=own_records, kernel=counting(calls),
                            scheduler="serial", progress=False))
     assert ds.theta_lower.sizes["history"] == 1

@@ -30,7 +30,7 @@ from urmx.errors import InputError, RunError
 from urmx.study import clients, engine
 
 from .fixtures import cluster as C
-from .test_reliability import STUDY, fake_kernel, ida_kernel
+from .helpers.gaps_study import STUDY, fake_kernel, ida_kernel
 
 ENDS_WITHIN = 60  # s: a run that loses its cluster must have ended by then (it takes ~3 s)
 
@@ -108,7 +108,7 @@ def test_a_worker_with_another_kernel_is_refused_before_any_work(external, clust
     assert not out.exists() and not out.with_name("mixed.nc.parts").exists()
 
 
-def test_a_result_from_other_code_is_never_kept(fake_records, make_study, tmp_path,
+def test_a_result_from_other_code_is_never_kept(gaps_records, make_study, tmp_path,
                                                 monkeypatch):
     """A worker that passed the check when the run connected but then computes with other
     code (here: its identity differs on the worker threads only): its first result stops
@@ -214,14 +214,7 @@ def test_a_cluster_without_workers_is_said_before_any_work(external, cluster_stu
 
 # ---- closed and unusable clients ---------------------------------------------------------
 
-@pytest.fixture
-def fake_records(use_records):
-    from .test_reliability import ACC, DT, SCALE
-
-    use_records(ACC, SCALE, DT)
-
-
-def test_a_closed_or_unusable_client_is_an_input_error(fake_records, make_study):
+def test_a_closed_or_unusable_client_is_an_input_error(gaps_records, make_study):
     from distributed import Client
 
     study = make_study(STUDY, "gaps.toml")
@@ -252,7 +245,7 @@ def _stamped_where(*args):
     return clients.run_stamped(*args)
 
 
-def test_an_active_client_is_used(fake_records, make_study, monkeypatch):
+def test_an_active_client_is_used(gaps_records, make_study, monkeypatch):
     """With a distributed.Client active (a notebook's), scheduler=None runs the batches on
     it: no cluster of urmx's own, nothing in this process."""
     from distributed import Client
@@ -273,7 +266,7 @@ def test_an_active_client_is_used(fake_records, make_study, monkeypatch):
     _same(serial, ds)
 
 
-def test_a_small_study_runs_in_this_process(fake_records, make_study, monkeypatch):
+def test_a_small_study_runs_in_this_process(gaps_records, make_study, monkeypatch):
     """scheduler=None without an active client: the first batch runs here, timed; a study
     estimated under urmx.serial-below seconds (10 by default) runs here entirely, a larger
     one sends the rest to a local cluster."""
@@ -336,7 +329,7 @@ def _git(*args: str) -> str:
 
 
 @pytest.mark.parametrize("kind", ["grid", "ida"])
-def test_archives_record_how_they_were_made(fake_records, make_study, tmp_path, kind):
+def test_archives_record_how_they_were_made(gaps_records, make_study, tmp_path, kind):
     import dask
     import distributed
     import netCDF4
@@ -344,7 +337,7 @@ def test_archives_record_how_they_were_made(fake_records, make_study, tmp_path, 
     import obspy
     import scipy
 
-    from .test_reliability import IDA_STUDY
+    from .helpers.gaps_study import IDA_STUDY
 
     text, kernel = (STUDY, fake_kernel) if kind == "grid" else (IDA_STUDY, ida_kernel)
     out = tmp_path / f"{kind}.nc"

@@ -406,16 +406,6 @@ def _git(cwd: Path, *args: str) -> str:
                           check=True, env=env).stdout.strip()
 
 
-def fallback_version() -> str:
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # Python 3.10
-        import tomli as tomllib
-
-    with open(ROOT / "pyproject.toml", "rb") as f:
-        return tomllib.load(f)["tool"]["setuptools_scm"]["fallback_version"]
-
-
 def test_a_checkouts_release_is_its_nearest_tag(tmp_path, monkeypatch):
     """`git_release` names a checkout's version from its tags as setuptools-scm's
     post-release scheme does, and `code_version` adds the commit: no tag, at the tag, three

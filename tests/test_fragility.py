@@ -33,6 +33,18 @@ from urmx.study.file import load_study
 
 from .fixtures.records import record_file
 from .fixtures.signals import interruptible
+from .helpers.ida_study import (
+    ACC,
+    CALLS,
+    FAIL_AT,
+    IDA_STUDY,
+    REP_IDA,
+    SMALL_IDA,
+    Interrupt,
+    stiff_kernel,
+    study_kernel,
+    threshold,
+)
 
 
 @pytest.fixture(scope="module")
@@ -548,80 +560,6 @@ def test_bootstrap_is_seeded():
 
 # ---- the IDA study kind on a stand-in kernel ----------------------------------------------------
 
-DT = 0.01
-ACC = {"quake": np.r_[np.zeros(20), 2.0 * np.sin(np.linspace(0, 6 * np.pi, 180))],
-       "shake": np.r_[np.zeros(10), 3.0, -1.0, np.zeros(138)]}
-SCALE = {"quake": 1.0, "shake": 2.0}
-CALLS: list = []
-FAIL_AT: list[int] = []
-
-
-class Interrupt(Exception):
-    """Stands for Ctrl-C in the resume test."""
-
-
-def study_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
-    """Collapse iff the scaled PGA reaches 40/slenderness * (samples/150) * cor [m s-2]:
-    s08 5.33 (quake) / 4.0 (shake) at COR 1.0, s18 2.37 / 1.78."""
-    if FAIL_AT and len(CALLS) == FAIL_AT[0]:
-        raise Interrupt
-    thr = 40.0 / w.slenderness * (len(ag) / 150.0) * cor
-    pga = scale * float(np.max(np.abs(ag)))
-    CALLS.append((w.slenderness, len(ag), round(scale, 12), cor))
-    ratio = min(1.0, pga / thr)
-    return {"status": "collapsed" if ratio >= 1.0 else "ok", "instability_ratio": ratio}
-
-
-def threshold(slenderness, record, cor):
-    return 40.0 / slenderness * (len(ACC[record]) / 150.0) * cor
-
-
-@pytest.fixture
-def fake_records(use_records):
-    use_records(ACC, SCALE, DT)
-    CALLS.clear()
-
-
-IDA_STUDY = """\
-[study]
-name = "tiny-ida"
-walls = ["s08", "s18"]
-diaphragms = ["D1", "D2/both"]
-records = ["quake", "shake"]
-cor = [0.8, 1.0]
-
-[study.ida]
-im = "pga"
-rtol = 1e-3
-step = 1.5
-max_intensity = 4.5
-"""
-
-
-SMALL_IDA = """
-[study]
-name = "small-ida"
-walls = ["s08", "s12", "s16", "s20", "s24"]
-diaphragms = ["D1", "D5", "D3/both"]
-records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
-cor = [0.8]
-[study.ida]
-im = "pga"
-"""
-
-
-REP_IDA = """
-[study]
-name = "rep-ida"
-walls = ["s08", "s16", "s24"]
-diaphragms = ["D1", "D4", "D1/both", "D4/both"]
-records = ["quake", "shake"]
-cor = [0.8]
-[study.ida]
-max_intensity = 100.0
-"""
-
-
 def _ida(path, **kw):
     kw.setdefault("scheduler", "serial")
     return st.run_study(path, kernel=study_kernel, progress=False, batch_size=2, **kw)
@@ -632,7 +570,7 @@ def tiny(make_study):
     return make_study(IDA_STUDY, "tiny.toml")
 
 
-def test_ida_archive_schema_values_and_fits(fake_records, tiny, tmp_path):
+def test_ida_archive_schema_values_and_fits(ida_records, tiny, tmp_path):
     out = tmp_path / "tiny.nc"
     ds = _ida(tiny, out=out)
     dims = ("wall", "diaphragm", "record", "cor")
@@ -689,7 +627,7 @@ def test_ida_archive_schema_values_and_fits(fake_records, tiny, tmp_path):
     assert not (tmp_path / "tiny.nc.parts").exists()
 
 
-def test_ida_study_with_another_measure(fake_records, make_study):
+def test_ida_study_with_another_measure(ida_records, make_study):
     p = make_study(IDA_STUDY.replace('im = "pga"', 'im = "scale"').replace(
         "max_intensity = 4.5", "max_intensity = 20.0"), "scale.toml")
     ds = _ida(p)
@@ -701,7 +639,7 @@ def test_ida_study_with_another_measure(fake_records, make_study):
     assert threshold(18, "shake", 0.8) / 6.0 <= c <= threshold(18, "shake", 0.8) / 6.0 * 1.001
 
 
-def test_interrupted_ida_resumes_without_recomputing(fake_records, tiny, tmp_path):
+def test_interrupted_ida_resumes_without_recomputing(ida_records, tiny, tmp_path):
     reference = _ida(tiny, out=tmp_path / "ref.nc")
     total = len(CALLS)
     CALLS.clear()
@@ -769,7 +707,7 @@ def test_cli_ida_needs_an_ida_table(capsys):
     assert "has no [study.ida] table" in capsys.readouterr().err
 
 
-def test_urmx_run_runs_an_ida_study_and_urmx_ida_is_its_alias(fake_records, tiny, tmp_path,
+def test_urmx_run_runs_an_ida_study_and_urmx_ida_is_its_alias(ida_records, tiny, tmp_path,
                                                               capsys):
     """`urmx run` runs a study of any kind; `urmx ida` writes the same archive (real
     kernel, on the small synthetic records)."""
@@ -877,15 +815,7 @@ def test_ctrl_c_then_rerun_loses_no_cell(library, make_study, tmp_path):
 
 # ---- the report ---------------------------------------------------------------------------------
 
-def stiff_kernel(w, ag, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
-    """As `study_kernel`, with the threshold times (k_top / 815 kN/m)**0.1: D4 is 1.478
-    times as strong as D1 for every wall and record."""
-    thr = 40.0 / w.slenderness * (len(ag) / 150.0) * cor * (w.top_stiffness / 815e3) ** 0.1
-    ratio = min(1.0, scale * float(np.max(np.abs(ag))) / thr)
-    return {"status": "collapsed" if ratio >= 1.0 else "ok", "instability_ratio": ratio}
-
-
-def test_fragility_report_numbers_and_figures(fake_records, make_study, tmp_path):
+def test_fragility_report_numbers_and_figures(ida_records, make_study, tmp_path):
     from urmx.reports.ida import write_report
 
     p = make_study(REP_IDA, "rep.toml")

@@ -22,7 +22,7 @@ import urmx.records
 from urmx.cli import main
 from urmx.config import checkout, data_dir
 
-from .test_docs import fallback_version
+from .helpers.runs import fallback_version
 
 ROOT = Path(__file__).resolve().parent.parent
 #: what a wheel is built from (the rest of the checkout is not needed)
@@ -215,7 +215,7 @@ def test_what_needs_a_checkout_says_so_in_one_line(tmp_path, monkeypatch, capsys
 QUICK_START_SUBSET = ("tests/test_fixtures.py "
                       "tests/test_records.py::test_shipped_records_are_the_manifests "
                       "tests/test_records.py::test_load_paper_records "
-                      "tests/test_record_checks.py::test_csv_with_a_header_row_reads_as_the_"
+                      "tests/test_records_checks.py::test_csv_with_a_header_row_reads_as_the_"
                       "bare_numbers")
 
 

@@ -26,6 +26,10 @@ from urmx.study.dataset import grid_coords
 from urmx.study.file import load_study
 
 from .fixtures.signals import killed_after_parts
+from .helpers.runs import same_run
+from .helpers.synthetic import DT
+from .helpers.synthetic import TOY_ACC as ACC
+from .helpers.synthetic import TOY_SCALE as SCALE
 
 # ---- the toy kind: value = gain * record peak * wall height * cor, one value per cell -------
 
@@ -66,10 +70,6 @@ TOY = kinds.register(kinds.Kind(name="toy", table="toy", unit="cells", outputs=(
 
 # ---- the tests -------------------------------------------------------------------------------
 
-DT = 0.01
-ACC = {"quake": np.r_[np.zeros(5), 2.0, -1.0, np.zeros(43)],
-       "shake": np.r_[np.zeros(5), -3.0, 1.0, np.zeros(43)]}
-SCALE = {"quake": 1.0, "shake": 1.0}
 STUDY = """\
 [study]
 name = "toy-study"
@@ -91,14 +91,6 @@ def toy(make_study, use_records):
     return make_study(STUDY, "toy.toml")
 
 
-def _same(a: xr.Dataset, b: xr.Dataset) -> None:
-    a, b = a.copy(), b.copy()
-    for ds in (a, b):
-        # this run's line (an extended archive lists the earlier runs' after it)
-        ds.attrs["history"] = ds.attrs["history"].splitlines()[0].split(" ", 1)[1]
-    xr.testing.assert_identical(a, b)
-
-
 def test_a_kind_registered_from_outside_runs_into_an_archive(toy, tmp_path):
     study = load_study(toy)
     assert (study.kind, study.settings) == ("toy", 2.0)
@@ -109,7 +101,7 @@ def test_a_kind_registered_from_outside_runs_into_an_archive(toy, tmp_path):
     assert float(cell) == pytest.approx(2.0 * 3.0 * 16 * 0.23 * 0.8, rel=1e-12)
     assert ds.value.dims == ("wall", "diaphragm", "record", "cor")
     assert ds.attrs["study_name"] == "toy-study"
-    _same(ds, urmx.open_study(out).load())
+    same_run(ds, urmx.open_study(out).load())
     assert [k.name for k in kinds.registered()][:2] == ["grid", "ida"]  # built-ins untouched
 
 
@@ -142,10 +134,10 @@ def test_the_lock_and_progress_hold_for_the_toy_kind(toy, tmp_path):
     assert lines[-1].startswith("urmx toy-study: 100% 24/24") and "cells/s" in lines[-1]
 
 
-RUN = """\
+RUN = f"""\
 import sys
 import urmx
-import tests.test_kinds as T
+import {__name__} as T
 from tests.fixtures.pinned import served
 
 with served(T.ACC, T.SCALE, T.DT):
@@ -163,7 +155,7 @@ def test_the_toy_kind_resumes_after_its_run_is_killed(toy, tmp_path):
     ds = urmx.run_study(toy, out=out, scheduler="serial", progress=False, batch_size=1)
     assert len(RUNS) == BATCHES - kept  # the killed run's batches are not run again
     RUNS.clear()
-    _same(ds, urmx.run_study(toy, scheduler="serial", progress=False, batch_size=1))
+    same_run(ds, urmx.run_study(toy, scheduler="serial", progress=False, batch_size=1))
 
 
 # ---- a batch runs on numpy alone ---------------------------------------------------------------

@@ -29,8 +29,7 @@ from urmx.cli import main
 from urmx.errors import InputError, OutputError, UrmxError
 from urmx.study.file import load_study
 
-from .test_cells import _counting, _own, _quiet_run
-from .test_cells import own_records as own_records  # noqa: F401 - a fixture
+from .helpers.own_records import Interrupt, counting, own_grid, quiet_run
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -108,24 +107,22 @@ def test_the_resonance_view_reads_the_diaphragms_own_frequency(single):
 
 def test_parts_of_another_kernel_are_computed_again_with_a_word(make_study, tmp_path,
                                                                  own_records):
-    from .test_cells import Interrupt
-
     out = tmp_path / "own.nc"
     calls: list = []
     with pytest.raises(Interrupt):
-        st.run_study(_own(make_study), out=out, records_dir=own_records, batch_size=2,
-                     kernel=_counting(calls, 6), scheduler="serial", progress=False)
+        st.run_study(own_grid(make_study), out=out, records_dir=own_records, batch_size=2,
+                     kernel=counting(calls, 6), scheduler="serial", progress=False)
     parts = tmp_path / "own.nc.parts"
     assert len(list(parts.glob("*.npz"))) == 3
-    other = _counting([])
+    other = counting([])
     other.__qualname__ = "another"  # another kernel: other cell keys
     calls.clear()
-    ds, said = _quiet_run(_own(make_study), out=out, records_dir=own_records,
-                          kernel=other, scheduler="serial")
+    ds, said = quiet_run(own_grid(make_study), out=out, records_dir=own_records,
+                         kernel=other, scheduler="serial")
     assert st.last_run().from_parts == 0 and st.last_run().computed == 24
     assert (f"urmx: 3 finished part(s) in {parts} hold no cell of this run: they were "
-            "computed by another kernel (kernel tests.test_cells.counting there, "
-            "tests.test_cells.another now), so their cells are computed again") in said
+            "computed by another kernel (kernel tests.helpers.own_records.counting there, "
+            "tests.helpers.own_records.another now), so their cells are computed again") in said
     assert int(ds.sizes["wall"]) == 2
 
 
@@ -152,7 +149,7 @@ sys.exit(main(sys.argv[1:]))
 def test_a_run_killed_while_writing_its_archive_leaves_a_temporary_file_that_the_next_run_removes(  # noqa: E501
         make_study, own_records, tmp_path):
     out = tmp_path / "own.nc"
-    study = _own(make_study)
+    study = own_grid(make_study)
     argv = ["run", str(study), "--out", str(out), "--records", str(own_records),
             "--scheduler", "serial", "--quiet"]
     proc = subprocess.run([sys.executable, "-c", KILL_IN_WRITE, *argv], cwd=ROOT,
@@ -161,7 +158,7 @@ def test_a_run_killed_while_writing_its_archive_leaves_a_temporary_file_that_the
     left = list(tmp_path.glob(".own.nc.*.tmp"))
     assert len(left) == 1 and not out.exists()
     pid = int(left[0].name.split(".")[-2])
-    ds, said = _quiet_run(study, out=out, records_dir=own_records, scheduler="serial")
+    ds, said = quiet_run(study, out=out, records_dir=own_records, scheduler="serial")
     assert not list(tmp_path.glob(".own.nc.*.tmp")) and out.is_file()
     assert (f"urmx: removed {left[0]}, a temporary file left by a run that was killed while "
             f"writing it (pid {pid}, no longer running)") in said

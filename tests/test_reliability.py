@@ -10,7 +10,6 @@ integrator's numbers.
 from __future__ import annotations
 
 import io
-import math
 import os
 import shutil
 import signal
@@ -32,79 +31,24 @@ from urmx import variables
 from urmx.analysis import grid as A
 from urmx.errors import OutputError, RunError, UrmxError
 
-DT = 0.01
-ACC = {"quake": np.r_[np.zeros(5), 1.0, -0.5, np.zeros(93)],  # PGA 1.0 m s-2
-       "shake": np.r_[np.zeros(10), 3.0, -1.0, np.zeros(88)]}  # PGA 3.0 m s-2
-SCALE = {"quake": 1.0, "shake": 2.0}  # scaled PGA: quake 1.0, shake 6.0
-JUNK = 1e9  # what an event-limit cell's outputs hold in the stand-in kernel
-SLEEP = "URMX_TEST_KERNEL_SLEEP"  # seconds slow_kernel takes per analysis (worker processes
-# import this module afresh, so the setting travels in the environment)
-
-
-def fake_kernel(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
-                history=False):
-    """Stand-in with the interface of urmx.kernel.run.
-
-    - base_impacts = 10 * scaled PGA + 100 * cor (rounded); crack_impacts = 3;
-    - collapsed = 1 for the slender wall (height > 3 m) under the strong record (PGA > 5);
-    - the stocky wall under the strong record at COR 0.7 stops at the event limit, with
-      outputs that would spoil any reduction (JUNK).
-    """
-    pga = scale * float(np.max(np.abs(ground_acceleration)))
-    out = {name: 0.0 for name in variables.SCALARS}
-    out["peak_crack_displacement"] = pga * wall.height * cor / 100.0
-    out["instability_ratio"] = min(1.0, pga * cor / wall.slenderness)
-    out["collapsed"] = int(wall.height > 3.0 and pga > 5.0)
-    out["collapse_time"] = 0.5 if out["collapsed"] else math.nan
-    out["base_impacts"] = int(round(10 * pga + 100 * cor))
-    out["crack_impacts"] = 3
-    out["status"] = "collapsed" if out["collapsed"] else "ok"
-    if wall.height < 3.0 and pga > 5.0 and cor < 0.75:
-        out.update({name: JUNK for name in variables.SCALARS})
-        out.update(collapsed=1, base_impacts=999_999, crack_impacts=999_999,
-                   status="event-limit")
-    return out
-
-
-def slow_kernel(*args, **kw):
-    """`fake_kernel`, taking os.environ[SLEEP] seconds."""
-    time.sleep(float(os.environ.get(SLEEP, "0")))
-    return fake_kernel(*args, **kw)
-
-
-def ida_threshold(slenderness: float, cor: float) -> float:
-    """Scaled PGA at which `ida_kernel` collapses a wall: 20 / (slenderness * cor) [m s-2]
-    (s08 at COR 0.8: 3.125; s18: 1.389)."""
-    return 20.0 / (slenderness * cor)
-
-
-def ida_kernel(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", **kw):
-    """Stand-in for the IDA search: the wall collapses iff the scaled PGA reaches
-    `ida_threshold`; the instability ratio grows in proportion to the PGA below it. Takes
-    os.environ[SLEEP] seconds."""
-    time.sleep(float(os.environ.get(SLEEP, "0")))
-    pga = scale * float(np.max(np.abs(ground_acceleration)))
-    ratio = min(1.0, pga / ida_threshold(wall.slenderness, cor))
-    return {"status": "collapsed" if ratio >= 1.0 else "ok", "instability_ratio": ratio}
-
-
-@pytest.fixture
-def fake_records(use_records):
-    use_records(ACC, SCALE, DT)
-
-
-# 2 walls x 2 diaphragms x 2 records x 2 CORs = 16 cells; s18 is not run under "quake"
-# (4 cells) and s08 under "shake" at COR 0.7 stops at the event limit (2 cells): 10 valid
-STUDY = """\
-[study]
-name = "gaps"
-walls = ["s08", "s18"]
-diaphragms = ["D1", "D5"]
-supports = "top"
-records = ["quake", "shake"]
-cor = [0.7, 0.8]
-pairs = {s08 = ["quake", "shake"], s18 = ["shake"]}
-"""
+from .helpers.gaps_study import (
+    ACC,
+    DT,
+    IDA_CENSORED,
+    IDA_RUN,
+    IDA_STUDY,
+    JUNK,
+    MANY,
+    SLEEP,
+    STUDY,
+    WIDE,
+    fake_kernel,
+    ida_kernel,
+    ida_threshold,
+    many_acceleration,
+    slow_kernel,
+)
+from .helpers.runs import Interrupt
 
 
 @pytest.fixture
@@ -155,7 +99,7 @@ def _check_reductions(ds: xr.Dataset) -> None:
         assert bool(np.isnan(not_run[name]).all()) and bool(np.isnan(stopped[name]).all())
 
 
-def test_cells_not_run_or_stopped_read_as_missing_after_round_trip(fake_records, gaps,
+def test_cells_not_run_or_stopped_read_as_missing_after_round_trip(gaps_records, gaps,
                                                                    tmp_path):
     out = tmp_path / "gaps.nc"
     ds = _run(gaps, out=out)
@@ -175,7 +119,7 @@ def test_cells_not_run_or_stopped_read_as_missing_after_round_trip(fake_records,
             assert int((raw[name] == -1).sum()) == 16 - VALID_CELLS
 
 
-def test_archive_without_fill_values_is_masked_by_status(fake_records, gaps, tmp_path):
+def test_archive_without_fill_values_is_masked_by_status(gaps_records, gaps, tmp_path):
     """An archive as urmx wrote it before (-1 in integer outputs, no _FillValue, partial
     peaks of event-limit cells): plain xarray reductions are wrong, open_study's are not."""
     ds = _run(gaps)
@@ -197,7 +141,7 @@ def test_archive_without_fill_values_is_masked_by_status(fake_records, gaps, tmp
     _check_reductions(urmx.open_study(path).load())
 
 
-def test_analysis_reductions_skip_cells_without_valid_result(fake_records, gaps):
+def test_analysis_reductions_skip_cells_without_valid_result(gaps_records, gaps):
     ds = _run(gaps).assign_coords(frequency_low=("record", [0.5, 0.5]),
                                   frequency_high=("record", [10.0, 10.0]))
     ratio = A.governing_instability(ds, cor=0.7)
@@ -216,19 +160,6 @@ def test_analysis_reductions_skip_cells_without_valid_result(fake_records, gaps)
     assert float(A.valid_cells(named).collapsed.sum()) == COLLAPSES
     # an unmasked Dataset would have given the junk: the check can fail
     assert float(ds.instability_ratio.fillna(JUNK).max()) == JUNK
-
-
-# the same study as an IDA study: s18 is not run under "quake" (2 diaphragms x 2 CORs = 4
-# cells of 16); s08 survives max_intensity 2.0 m s-2 (censored, 8 cells); s18 collapses under
-# "shake" (4 cells)
-IDA_STUDY = STUDY.replace('"gaps"', '"ida-gaps"') + """
-[study.ida]
-im = "pga"
-rtol = 1e-3
-step = 1.5
-max_intensity = 2.0
-"""
-IDA_RUN, IDA_CENSORED = 12, 8
 
 
 @pytest.fixture
@@ -279,7 +210,7 @@ def _check_ida_reductions(ds: xr.Dataset) -> None:
     assert bool(np.isnan(not_run.intensity).all())
 
 
-def test_ida_cells_not_run_read_as_missing_after_round_trip(fake_records, ida_gaps,
+def test_ida_cells_not_run_read_as_missing_after_round_trip(gaps_records, ida_gaps,
                                                             tmp_path):
     out = tmp_path / "ida.nc"
     ds = _run_ida(ida_gaps, out=out)
@@ -297,7 +228,7 @@ def test_ida_cells_not_run_read_as_missing_after_round_trip(fake_records, ida_ga
         assert int((raw.censored == 0).sum()) == IDA_RUN - IDA_CENSORED
 
 
-def test_ida_archive_without_fill_values_is_masked(fake_records, ida_gaps, tmp_path):
+def test_ida_archive_without_fill_values_is_masked(gaps_records, ida_gaps, tmp_path):
     """An IDA archive as urmx wrote it before (-1 counts, censored False where a cell was
     not run, no _FillValue): plain xarray reductions are wrong, open_study's are not."""
     ds = _run_ida(ida_gaps)
@@ -395,21 +326,9 @@ def test_header_dt_not_positive_is_refused(tmp_path, dt_text):
 
 # ---- a lost worker -----------------------------------------------------------------------
 
-MANY = [f"r{i:02d}" for i in range(40)]  # 40 synthetic records: PGA 0.1 ... 4.0 m s-2
-WIDE = f"""\
-[study]
-name = "wide"
-walls = "parametric"
-diaphragms = ["D1", "D2", "D3", "D4", "D5"]
-records = {MANY!r}
-cor = [0.8]
-"""
-
-
 @pytest.fixture
 def many_records(use_records):
-    acc = {rid: np.r_[np.zeros(5), 0.1 * (i + 1), -0.05, np.zeros(43)]
-           for i, rid in enumerate(MANY)}
+    acc = many_acceleration()
     use_records(acc, dict.fromkeys(acc, 1.0), DT)
 
 
@@ -482,7 +401,7 @@ def test_run_survives_a_killed_worker(many_records, tmp_path, monkeypatch, kind)
 
 # ---- concurrent runs, damaged parts, unwritable outputs ---------------------------------
 
-def test_second_run_on_the_same_archive_is_refused(fake_records, gaps, ida_gaps, tmp_path):
+def test_second_run_on_the_same_archive_is_refused(gaps_records, gaps, ida_gaps, tmp_path):
     out = tmp_path / "busy.nc"
     parts = tmp_path / "busy.nc.parts"
     with st.Lock(parts, out):  # what a running `urmx run` holds
@@ -494,7 +413,7 @@ def test_second_run_on_the_same_archive_is_refused(fake_records, gaps, ida_gaps,
     _check_reductions(_run(gaps, out=out))  # free again
 
 
-def test_lock_of_a_killed_run_is_released(fake_records, gaps, tmp_path):
+def test_lock_of_a_killed_run_is_released(gaps_records, gaps, tmp_path):
     out = tmp_path / "dead.nc"
     code = ("import sys, time; from pathlib import Path; from urmx.study import Lock; "
             "Lock(Path(sys.argv[1]), Path(sys.argv[2])).__enter__(); print('held', "
@@ -511,7 +430,7 @@ def test_lock_of_a_killed_run_is_released(fake_records, gaps, tmp_path):
     _check_reductions(_run(gaps, out=out))
 
 
-def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
+def test_foreign_and_damaged_parts_are_recomputed(gaps_records, gaps, tmp_path):
     reference = _run(gaps)
     out = tmp_path / "parts.nc"
     parts = tmp_path / "parts.nc.parts"
@@ -542,7 +461,7 @@ def test_foreign_and_damaged_parts_are_recomputed(fake_records, gaps, tmp_path):
     assert not parts.exists()
 
 
-def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tmp_path):
+def test_foreign_and_damaged_ida_parts_are_recomputed(gaps_records, ida_gaps, tmp_path):
     """The same checks on an IDA study's parts (their own arrays, their own keys)."""
     from urmx.study.kinds import ida
 
@@ -582,12 +501,8 @@ def test_foreign_and_damaged_ida_parts_are_recomputed(fake_records, ida_gaps, tm
     assert not parts.exists()
 
 
-class Interrupt(Exception):
-    """Stands for Ctrl-C (or a killed run) partway through a study."""
-
-
 @pytest.mark.parametrize("kind", ["grid", "ida"])
-def test_parts_of_another_kernel_source_are_recomputed(fake_records, gaps, ida_gaps, tmp_path,
+def test_parts_of_another_kernel_source_are_recomputed(gaps_records, gaps, ida_gaps, tmp_path,
                                                        monkeypatch, kind):
     """A batch key holds `urmx.jitcache.SOURCE_HASH` (the compiled kernel's sources): after
     the kernel changes, parts an older kernel computed are not reused; with the same
@@ -642,7 +557,7 @@ def test_parts_of_another_kernel_source_are_recomputed(fake_records, gaps, ida_g
     assert len(calls) == total
 
 
-def test_outputs_checked_before_any_work(fake_records, gaps, tmp_path):
+def test_outputs_checked_before_any_work(gaps_records, gaps, tmp_path):
     calls = []
 
     def counting(*args, **kw):
@@ -671,7 +586,7 @@ def _counting(calls: list):
     return kernel
 
 
-def test_an_input_is_never_the_output(fake_records, gaps, tmp_path, monkeypatch, capsys):
+def test_an_input_is_never_the_output(gaps_records, gaps, tmp_path, monkeypatch, capsys):
     """`--out` naming the study file (by its name or a hard link), a record's file or the
     records manifest is refused before any work, and the input is left as it was."""
     from urmx.cli import main
@@ -753,7 +668,7 @@ def _leftovers(*folders: Path) -> list[Path]:
             or p.name.startswith(".urmx-probe")]
 
 
-def test_out_through_a_symlink_and_dotdot_is_resolved_before_the_work(fake_records, gaps,
+def test_out_through_a_symlink_and_dotdot_is_resolved_before_the_work(gaps_records, gaps,
                                                                        tmp_path):
     """``link/../x.nc`` with ``link`` a symbolic link to ``a/b``: the operating system's
     ``a/x.nc``. The path is resolved before the work, and the run writes exactly there
@@ -770,7 +685,7 @@ def test_out_through_a_symlink_and_dotdot_is_resolved_before_the_work(fake_recor
     assert not (tmp_path / "a" / "x.nc.parts").exists()
 
 
-def test_out_name_that_is_not_utf8_is_refused_before_the_work(fake_records, gaps, tmp_path):
+def test_out_name_that_is_not_utf8_is_refused_before_the_work(gaps_records, gaps, tmp_path):
     calls: list = []
     out = Path(os.fsdecode(os.fsencode(tmp_path) + b"/r\xe9sultat.nc"))  # Latin-1 bytes
     with pytest.raises(OutputError, match=r"r\\udce9sultat\.nc' cannot be written: its name is "
@@ -833,7 +748,7 @@ def _enospc():
 
 
 @pytest.mark.parametrize("way", ["tmpfs", "patched"])
-def test_a_full_disk_while_saving_parts_says_what_is_kept(fake_records, gaps, small_disk,
+def test_a_full_disk_while_saving_parts_says_what_is_kept(gaps_records, gaps, small_disk,
                                                          tmp_path, monkeypatch, way):
     """The disk fills after 3 of 6 batches: one line saying how many batches are kept and
     what to do, no temporary file left (a 0-byte one used to stay), and after freeing
@@ -881,7 +796,7 @@ def test_a_full_disk_while_saving_parts_says_what_is_kept(fake_records, gaps, sm
 
 
 @pytest.mark.parametrize("way", ["tmpfs", "patched"])
-def test_a_full_disk_at_the_final_write_keeps_the_parts(fake_records, gaps, small_disk,
+def test_a_full_disk_at_the_final_write_keeps_the_parts(gaps_records, gaps, small_disk,
                                                         tmp_path, monkeypatch, way):
     """The disk fills after the last batch is saved: the archive write fails with one line
     saying that the parts are kept and how to finish (it used to be `NetCDF: HDF error`
@@ -932,7 +847,7 @@ def test_a_full_disk_at_the_final_write_keeps_the_parts(fake_records, gaps, smal
 
 
 @pytest.mark.parametrize("way", ["tmpfs", "patched"])
-def test_a_full_disk_before_the_run_is_said_before_any_work(fake_records, gaps, small_disk,
+def test_a_full_disk_before_the_run_is_said_before_any_work(gaps_records, gaps, small_disk,
                                                             tmp_path, monkeypatch, way):
     """A test file is written (and flushed) where the archive goes before anything is
     computed: a full disk stops the run at once."""

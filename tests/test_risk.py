@@ -13,14 +13,14 @@ import xarray as xr
 
 import urmx
 from urmx import fragility as F
-from urmx import study as st
 from urmx.analysis import ida as FA
 from urmx.catalog import catalog_dir
 from urmx.cli import main
 from urmx.errors import InputError, MissingFileError
 from urmx.records.readers import STANDARD_GRAVITY
 
-from .test_fragility import ACC, IDA_STUDY, REP_IDA, stiff_kernel, study_kernel
+from .helpers.ida_study import ACC, IDA_STUDY, REP_IDA, stiff_kernel
+from .helpers.ida_study import run as _run
 
 HAZARD = catalog_dir() / "hazard" / "illustrative-pga-hazard.csv"
 SPECTRUM = catalog_dir() / "hazard" / "illustrative-design-spectrum.csv"
@@ -141,12 +141,7 @@ def test_bad_design_spectra(tmp_path):
 
 # ---- every measure from one IDA run ---------------------------------------------------------
 
-def _run(make_study, text, name, kernel=study_kernel):
-    return st.run_study(make_study(text, name), kernel=kernel, scheduler="serial",
-                        progress=False, batch_size=2)
-
-
-def test_one_ida_run_gives_the_capacities_in_every_measure(fake_records, make_study):
+def test_one_ida_run_gives_the_capacities_in_every_measure(ida_records, make_study):
     """The archive holds the scale factor at collapse and each record's intensity in every
     measure; a run in pga and a run in sa_avg give the same capacities in sa_avg (the search
     runs on scale factors)."""
@@ -179,7 +174,7 @@ def test_one_ida_run_gives_the_capacities_in_every_measure(fake_records, make_st
     assert in_pga.attrs["confidence_level"] == 0.9
 
 
-def test_sa_avg_range_in_a_study_file(fake_records, make_study):
+def test_sa_avg_range_in_a_study_file(ida_records, make_study):
     ds = _run(make_study, IDA_STUDY.replace('im = "pga"', 'im = "sa_avg"\nsa_avg_range = '
                                             '[0.2, 1.5]').replace("max_intensity = 4.5",
                                                                   "max_intensity = 40.0"),
@@ -196,14 +191,7 @@ def test_sa_avg_range_in_a_study_file(fake_records, make_study):
         urmx.study.load_study(bad)
 
 
-@pytest.fixture
-def fake_records(use_records):
-    from .test_fragility import SCALE
-
-    use_records(ACC, SCALE, 0.01)
-
-
-def test_efficiency_and_risk_of_a_stand_in_archive(fake_records, make_study, tmp_path):
+def test_efficiency_and_risk_of_a_stand_in_archive(ida_records, make_study, tmp_path):
     """With two records and a kernel that collapses at a PGA threshold, the dispersion in
     pga is half the log-ratio of the thresholds; the rate of collapse is the closed form of
     the fit over a power-law curve; stiffening D1 -> D4 raises every median 1.478 times,
@@ -284,7 +272,7 @@ def test_magnitude_and_distance_of_the_fema_records(records_dir):
 
 # ---- urmx risk ---------------------------------------------------------------------------------
 
-def test_urmx_risk_prints_the_tables(fake_records, make_study, tmp_path, capsys):
+def test_urmx_risk_prints_the_tables(ida_records, make_study, tmp_path, capsys):
     ds = _run(make_study, REP_IDA, "rep.toml", kernel=stiff_kernel)
     archive = tmp_path / "rep.nc"
     urmx.netcdf.write_netcdf(ds, archive)

@@ -40,6 +40,9 @@ from urmx.uncertainty import (
 )
 
 from .fixtures.signals import killed_after_parts
+from .helpers.synthetic import DT
+from .helpers.synthetic import SAMPLING_ACC as ACC
+from .helpers.synthetic import SAMPLING_SCALE as SCALE
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -150,11 +153,6 @@ def test_a_sample_replaces_wall_fields_and_scales_the_supports(make_wall):
 
 # ---- study files: refused at load, naming the parameter ----------------------------------------
 
-DT = 0.01
-_t = np.arange(400) * DT
-ACC = {"quake": 3.0 * np.sin(2 * np.pi * 2.0 * _t) * np.exp(-0.3 * _t),
-       "shake": 2.5 * np.sin(2 * np.pi * 1.2 * _t) * np.exp(-0.2 * _t)}
-SCALE = {"quake": 1.0, "shake": 1.0}
 STUDY = """\
 [study]
 name = "sampled"
@@ -308,10 +306,10 @@ def test_a_time_history_study_runs_each_sample_as_drawn(sampled, tmp_path):
     _bitwise(ds, urmx.open_study(tmp_path / "a.nc").load())
 
 
-RUN = """\
+RUN = f"""\
 import sys
 import urmx
-import tests.test_sampling as T
+import {__name__} as T
 from tests.fixtures.pinned import served
 
 with served(T.ACC, T.SCALE, T.DT):

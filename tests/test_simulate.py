@@ -19,6 +19,8 @@ from urmx.cli import main
 from urmx.netcdf import write_netcdf
 from urmx.variables import HISTORIES, INTEGER_SCALARS, SCALARS, attrs
 
+from .helpers.kernel import c9_chatter
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "catalog" / "examples"
 DT = 0.02
 
@@ -363,3 +365,13 @@ def test_cli_errors_one_line(capsys, tmp_path, record5s, argv, message):
     assert err.startswith("urmx simulate: error: ") and message in err
     if argv[0] == str(bad):
         assert str(bad) in err
+
+
+# ---- t_rest, the rest time of held joints (issue 32) ----------------------------------
+
+def test_simulate_passes_and_records_t_rest():
+    case = c9_chatter()
+    ds = urmx.simulate(case.pop("wall"), case.pop("ground_acceleration"), case.pop("dt"),
+                       t_rest=0.02, **case)
+    assert ds.attrs["t_rest"] == 0.02 and "t_rest=0.02" in ds.attrs["history"]
+    assert int(ds["crack_impacts"]) == 130

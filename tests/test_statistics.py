@@ -3,7 +3,7 @@ the manifest and in every resampling, the studentized and BCa intervals' parts, 
 bootstrap of the sufficiency slope, hazard curves in any measure (the OpenQuake engine's
 ``hazard_curve-*.csv``, ``sa(T)``), the deaggregation of a rate and its extrapolated share,
 the pga / sa_avg comparison, the variance shares beside PRCC and the reports' provenance
-line. The coverage of the intervals is `tests/test_fit_coverage.py`."""
+line. The coverage of the intervals is `tests/test_fits.py`."""
 
 from __future__ import annotations
 
@@ -29,8 +29,8 @@ from urmx.fragility.risk import (
 )
 from urmx.records.readers import STANDARD_GRAVITY
 
-from .test_fragility import REP_IDA, stiff_kernel
-from .test_risk import _run, fake_records  # noqa: F401  (a fixture)
+from .helpers.ida_study import REP_IDA, stiff_kernel
+from .helpers.ida_study import run as _run
 
 OQ = Path(__file__).parent / "fixtures" / "openquake" / "hazard_curve-mean-PGA_27.csv"
 HAZARD = catalog_dir() / "hazard" / "illustrative-pga-hazard.csv"
@@ -256,7 +256,7 @@ def test_a_fragility_in_another_measure_is_refused_in_one_line(capsys):
     assert f"{100 * r.extrapolated_share:.3g} %" in out
 
 
-def test_urmx_risk_reads_an_openquake_curve_for_an_archive(fake_records, make_study,  # noqa: F811
+def test_urmx_risk_reads_an_openquake_curve_for_an_archive(ida_records, make_study,
                                                            tmp_path, capsys):
     ds = _run(make_study, REP_IDA, "rep.toml", kernel=stiff_kernel)
     archive = tmp_path / "rep.nc"
@@ -271,7 +271,7 @@ def test_urmx_risk_reads_an_openquake_curve_for_an_archive(fake_records, make_st
     assert float(c.band_share.sum()) == pytest.approx(1.0, abs=1e-9)
 
 
-def test_the_sa_avg_curve_is_the_pga_curve_scaled_by_the_spectrum_shape(fake_records,  # noqa: F811
+def test_the_sa_avg_curve_is_the_pga_curve_scaled_by_the_spectrum_shape(ida_records,
                                                                         make_study):
     """NZS 1170.5 scales every ordinate by R: the sa_avg curve's intensity at a return
     period is the spectrum's geometric mean over the periods over its PGA times the PGA
@@ -334,13 +334,13 @@ def test_variance_shares_of_a_linear_model_and_their_rank_fallback():
     assert rz["r2"] < 0.7 and rz["ranks"] and rz["r2_ranks"] > rz["r2"]
 
 
-def test_capacities_in_sa_at_a_period_come_from_the_records(fake_records,  # noqa: F811
+def test_capacities_in_sa_at_a_period_come_from_the_records(ida_records,
                                                             make_study):
     """sa(T): the scale factor at collapse times the record's 5 %-damped Sa at T as
     analysed (its scale factor: 2 on "shake"); a measure urmx cannot compute is refused."""
     from urmx.records.measures import pseudo_spectral_acceleration
 
-    from .test_fragility import ACC
+    from .helpers.ida_study import ACC
 
     ds = _run(make_study, REP_IDA, "rep.toml", kernel=stiff_kernel)
     cap = FA.capacities(ds, "sa(0.30)")

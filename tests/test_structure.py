@@ -518,3 +518,62 @@ def test_the_layout_page_names_every_module_and_folder():
                if p.is_dir() and not p.name.startswith(".") and p.name not in
                ("results", "build", "dist", "scratch") and not p.name.endswith(".egg-info")}
     assert not {f for f in folders if f"{f}/" not in layout}, "docs/layout.md lacks a folder"
+
+
+# ---- the tests themselves: no test module imports another ---------------------------------
+
+TESTS = Path(__file__).resolve().parent
+
+
+def _test_modules_imported(source: str, package: str = "tests") -> list[str]:
+    """The test modules (``tests.test_*``) that Python `source`, a module of `package`,
+    imports: ``import tests.test_x``, ``from tests.test_x import ...``, ``from tests import
+    test_x``, the relative forms (``from .test_x``, ``from . import test_x``, ``from
+    ..test_x`` in a subpackage) and ``importlib.import_module("tests.test_x")``."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            parts = package.split(".")
+            base = ".".join(parts[:len(parts) - node.level + 1] if node.level else [])
+            module = ".".join(p for p in (base, node.module or "") if p)
+            names = [module, *(f"{module}.{a.name}" for a in node.names)]
+        elif isinstance(node, ast.Call) and ast.unparse(node.func).endswith("import_module") \
+                and node.args and isinstance(node.args[0], ast.Constant):
+            names = [str(node.args[0].value)]
+        found += [n for n in names if re.fullmatch(r"tests\.test_\w+", n)]
+    return sorted(set(found))
+
+
+def test_no_test_module_imports_another():
+    """Issue 35: test modules share data, stand-ins and fixtures through ``tests/helpers/``,
+    ``tests/fixtures/`` and ``conftest.py`` only; no test module imports a test module (not
+    even itself), and neither do the helpers and fixtures. The check is shown to find each
+    form of such an import planted in a source string, and to pass the shared places."""
+    bad = {}
+    for path in sorted(TESTS.rglob("*.py")):
+        package = ".".join(path.relative_to(TESTS.parent).parent.parts)
+        found = _test_modules_imported(path.read_text(encoding="utf-8"), package)
+        if found:
+            bad[str(path.relative_to(TESTS.parent))] = found
+    assert bad == {}
+    planted = {
+        "from .test_study import ACC\n": "tests.test_study",
+        "import tests.test_kinds as T\n": "tests.test_kinds",
+        "from tests.test_docs import fallback_version\n": "tests.test_docs",
+        "from . import test_cells\n": "tests.test_cells",
+        "from tests import test_risk\n": "tests.test_risk",
+        "def f():\n    from .test_fragility import ACC\n": "tests.test_fragility",
+        "import importlib\nT = importlib.import_module('tests.test_cells')\n":
+            "tests.test_cells",
+    }
+    for source, module in planted.items():
+        assert _test_modules_imported(source) == [module], source
+    assert _test_modules_imported("from ..test_study import ACC\n", "tests.helpers") == \
+        ["tests.test_study"]
+    for fine in ("from .helpers.grid_study import ACC\n", "from .fixtures import pinned\n",
+                 "import tests.helpers.kernel\n", "from ..fixtures.records import record_file\n",
+                 "from .conftest import x\n", "RUN = 'import tests.test_cells as T'\n"):
+        assert _test_modules_imported(fine) == [], fine

@@ -18,80 +18,7 @@ from urmx import variables
 from urmx.catalog import CatalogError
 from urmx.study.file import load_study
 
-
-class Interrupt(Exception):
-    """Stands for Ctrl-C or a killed worker in the resume test."""
-
-
-DT = 0.01
-# two synthetic records: "quake" (PGA 2.0 m s-2, 200 samples), "shake" (PGA 3.0, 150 samples)
-ACC = {"quake": 2.0 * np.sin(np.linspace(0.0, 4.0 * np.pi, 200)) / np.sin(np.pi / 2),
-       "shake": np.r_[np.zeros(10), 3.0, -1.0, np.zeros(138)]}
-ACC["quake"][50] = 2.0  # exact PGA
-SCALE = {"quake": 0.5, "shake": 2.0}
-CALLS: list[tuple] = []
-FAIL_AT: list[int] = []  # raise Interrupt instead of running the analysis number FAIL_AT[0]
-
-
-def fake_kernel(wall, ground_acceleration, dt, *, scale=1.0, cor=0.8, impact="scale", tail=0.0,
-                history=False):
-    """A stand-in with the interface of urmx.kernel.run and hand-computable outputs."""
-    pga = scale * float(np.max(np.abs(ground_acceleration)))
-    if FAIL_AT and len(CALLS) == FAIL_AT[0]:
-        raise Interrupt
-    CALLS.append((wall.height, wall.top_stiffness, round(pga, 9), cor, impact))
-    out = {name: 0.0 for name in variables.SCALARS}
-    out["peak_crack_displacement"] = pga * wall.height * cor / 100.0
-    out["peak_top_displacement"] = (len(ground_acceleration) - 1) * dt + tail
-    out["peak_top_acceleration"] = 1.0 if impact == "contact" else 0.0
-    out["instability_ratio"] = min(1.0, pga * cor / wall.slenderness)
-    out["collapsed"] = int(out["instability_ratio"] >= 1.0)
-    out["collapse_time"] = 1.5 if out["collapsed"] else math.nan
-    out["base_impacts"] = 7
-    out["status"] = "collapsed" if out["collapsed"] else "ok"
-    if history:
-        n = len(ground_acceleration)
-        out["history"] = {name: np.full(n, cor) for name in variables.HISTORIES}
-        out["history"]["time"] = np.arange(n) * dt
-    return out
-
-
-@pytest.fixture
-def fake_records(use_records):
-    use_records(ACC, SCALE, DT)
-    CALLS.clear()
-
-
-STUDY = """\
-[study]
-name = "small"
-title = "a small test grid"
-walls = ["s08", "s18"]
-diaphragms = ["D1", "D5-pinned"]
-supports = "top"
-records = ["quake", "shake"]
-cor = [0.7, 0.8]
-
-[[study.history]]
-wall = "s18"
-diaphragm = "D1"
-record = ["quake", "shake"]
-cor = 0.8
-"""
-
-
-DIMS_STUDY = """
-[study]
-walls = ["s18", "c9"]
-diaphragms = ["specimen"]
-supports = "specimen"
-records = ["quake", "shake"]
-cor = {start = 0.70, stop = 0.72, step = 0.01}
-scale = [1.0, 2.0]
-impact = ["scale", "contact"]
-damping = [0.05]
-pairs = {s18 = ["shake"], c9 = ["quake", "shake"]}
-"""
+from .helpers.grid_study import CALLS, DIMS_STUDY, DT, FAIL_AT, STUDY, Interrupt, fake_kernel
 
 
 @pytest.fixture
@@ -112,7 +39,7 @@ def _same_history(a, b):
     return a, b
 
 
-def test_dataset_schema_and_values(fake_records, small):
+def test_dataset_schema_and_values(grid_records, small):
     ds = _run(small)
     assert dict(ds.sizes) == {"wall": 2, "diaphragm": 2, "record": 2, "cor": 2, "history": 2,
                               "time": 200}
@@ -156,7 +83,7 @@ def test_dataset_schema_and_values(fake_records, small):
     assert len(CALLS) == 16  # 2 walls x 2 diaphragms x 2 records x 2 cor, once each
 
 
-def test_netcdf_round_trip_is_identical(fake_records, small, tmp_path):
+def test_netcdf_round_trip_is_identical(grid_records, small, tmp_path):
     out = tmp_path / "small.nc"
     ds = _run(small, out=out)
     assert not (tmp_path / "small.nc.parts").exists()
@@ -165,7 +92,7 @@ def test_netcdf_round_trip_is_identical(fake_records, small, tmp_path):
     xr.testing.assert_identical(ds, back.load())
 
 
-def test_added_dimensions_and_pairs(fake_records, make_study):
+def test_added_dimensions_and_pairs(grid_records, make_study):
     path = make_study(DIMS_STUDY, "dims.toml")
     ds = st.run_study(path, kernel=fake_kernel, scheduler="serial", progress=False)
     assert ds.peak_crack_displacement.dims == ("wall", "diaphragm", "record", "cor", "scale",
@@ -183,7 +110,7 @@ def test_added_dimensions_and_pairs(fake_records, make_study):
     assert np.isnan(ds.stiffness).all()
 
 
-def test_interrupted_run_resumes_without_recomputing(fake_records, small, tmp_path):
+def test_interrupted_run_resumes_without_recomputing(grid_records, small, tmp_path):
     reference = _run(small, out=tmp_path / "ref.nc")
     CALLS.clear()
     FAIL_AT.append(6)  # stop inside the fourth batch of two analyses
@@ -206,7 +133,7 @@ def test_interrupted_run_resumes_without_recomputing(fake_records, small, tmp_pa
     xr.testing.assert_identical(*_same_history(st.open_study(out).load(), reference))
 
 
-def test_local_cluster_equals_serial(fake_records, small):
+def test_local_cluster_equals_serial(grid_records, small):
     serial = _run(small)
     client = st.local_client(2)
     try:
@@ -218,7 +145,7 @@ def test_local_cluster_equals_serial(fake_records, small):
     xr.testing.assert_identical(*_same_history(serial, parallel))
 
 
-def test_run_grid_in_memory_equals_run_study(fake_records, small, tmp_path):
+def test_run_grid_in_memory_equals_run_study(grid_records, small, tmp_path):
     study = load_study(small)
     records = st.resolve_records(study)
     tasks = st.batch_tasks(study, records, batch_size=2, kernel=fake_kernel)
@@ -253,7 +180,7 @@ stiffness = -5.0e5
         load_study(path)
 
 
-def test_missing_record_fails_before_any_analysis(fake_records, make_study):
+def test_missing_record_fails_before_any_analysis(grid_records, make_study):
     path = make_study(STUDY.replace('["quake", "shake"]\ncor', '["quake", "elsewhere"]\ncor'),
                       "rec.toml")
     with pytest.raises(CatalogError, match=r"rec\.toml:7: study\.records: record 'elsewhere'"):

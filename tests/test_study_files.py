@@ -1,7 +1,7 @@
 """Study files that say what they do (issues 22, 25, 29): own record files with their
 provenance in the archive, own walls that keep their own diaphragm, one reference of every
-key (`docs/study-files.md`) held to the loader, and every value refused at load that would
-fail later (or silently do something else)."""
+key (`docs/study-files.md`) held to the loader, every value refused at load that would
+fail later (or silently do something else), and t_rest as a study key (issue 32)."""
 
 from __future__ import annotations
 
@@ -16,49 +16,21 @@ import pytest
 
 import urmx
 import urmx.catalog as C
+import urmx.study as st
 import urmx.study.file as F
+from urmx import kernel
 from urmx.catalog import CatalogError, load_catalog
+from urmx.study import kinds
+from urmx.study.cells import Cells
 from urmx.study.file import load_study
+from urmx.study.kinds import grid as grid_kind
 from urmx.study.samples import resolve_records
 
 from .fixtures.records import record_file
+from .helpers.grid_study import ACC, DT, SCALE
+from .helpers.own_files import AT2, OWN_FILES, PLAIN, V2A
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "study-files.md"
-AT2 = "formats/peer/RSN763_LOMAP_GIL067.AT2"
-V2A = "formats/geonet/20161113_110259_WTMC_20.V2A"
-PLAIN = "elcentro1940/elcentro_S00E_1940.dat"  # plain numbers: dt 0.02 s, cm/s2
-
-OWN = """\
-[study]
-name = "own-files"
-walls = ["mine"]
-diaphragms = ["specimen"]
-supports = "specimen"
-records = ["gilroy", "wtmc", "mine"]
-cor = [0.75, 0.85]
-
-[walls.mine]
-thickness = 0.23
-height = 3.2
-crack_ratio = 0.6
-mass = 6000.0
-top_stiffness = 1.2e6
-top_mass = 5000.0
-top_damping = 0.12
-
-[records.gilroy]
-file = "data/RSN763_LOMAP_GIL067.AT2"
-
-[records.wtmc]
-file = "data/20161113_110259_WTMC_20.V2A"
-channel = "S62W"
-
-[records.mine]
-file = "data/my-record.txt"
-dt = 0.02
-unit = "cm/s2"
-scale = 2.0
-"""
 
 GRID = """\
 [study]
@@ -72,14 +44,14 @@ cor = [0.8]
 
 @pytest.fixture
 def own_study(tmp_path) -> Path:
-    """The three record files copied into ``data/`` beside the study file ``OWN``."""
+    """The three record files copied into ``data/`` beside the study file ``OWN_FILES``."""
     data = tmp_path / "data"
     data.mkdir()
     for rel, name in ((AT2, None), (V2A, None), (PLAIN, "my-record.txt")):
         src = record_file(rel)
         shutil.copy(src, data / (name or src.name))
     path = tmp_path / "study.toml"
-    path.write_text(OWN, encoding="utf-8")
+    path.write_text(OWN_FILES, encoding="utf-8")
     return path
 
 
@@ -527,3 +499,48 @@ def test_the_loader_refuses_a_key_outside_the_declaration(make_study, table):
     old, new = tables[table]
     message = _refused(make_study, GRID.replace(old, new), "bogus_key")
     assert re.search(r"unknown (wall )?key 'bogus_key'|names a", message), message
+
+
+# ---- t_rest, a study key (issue 32) ----------------------------------------------------------
+
+REST_STUDY = """\
+[study]
+name = "rest"
+walls = ["s08"]
+diaphragms = ["D1"]
+supports = "top"
+records = ["quake"]
+cor = [0.8]
+"""
+
+
+def test_a_study_key_recorded_in_the_archive_and_in_the_cells_keys(make_study, use_records):
+    use_records(ACC, SCALE, DT)
+    default = load_study(make_study(REST_STUDY, "a.toml"))
+    same = load_study(make_study(REST_STUDY + "t_rest = 0.01\n", "b.toml"))
+    other = load_study(make_study(REST_STUDY + "t_rest = 0.02\n", "c.toml"))
+    assert (default.t_rest, other.t_rest) == (0.01, 0.02)
+    records = st.resolve_records(default)
+    every = [[0]] * 4
+
+    def keys(study):
+        return Cells(study, kinds.get("grid"), records).keys(every)
+
+    assert keys(default)[0, 0, 0, 0] == keys(same)[0, 0, 0, 0] != keys(other)[0, 0, 0, 0]
+    ds = st.run_study(other.path, scheduler="serial", progress=False)
+    assert ds.attrs["t_rest"] == 0.02
+    wall = other.wall(other.walls[0], other.diaphragms[0])
+    direct = kernel.run(wall, ACC["quake"], DT, scale=SCALE["quake"], t_rest=0.02)
+    assert float(ds["peak_top_displacement"].squeeze()) == direct["peak_top_displacement"]
+
+
+def test_a_task_gives_t_rest_to_the_kernel_only_when_it_is_not_the_default():
+    assert grid_kind.rest_time({"t_rest": 0.01}) == {} == grid_kind.rest_time({})
+    assert grid_kind.rest_time({"t_rest": 0.02}) == {"t_rest": 0.02}
+
+
+@pytest.mark.parametrize("bad", ["0.0", "-1", "\"soon\"", "inf"])
+def test_a_bad_study_t_rest_is_refused(make_study, bad):
+    path = make_study(REST_STUDY + f"t_rest = {bad}\n")
+    with pytest.raises(CatalogError, match="study.t_rest"):
+        load_study(path)

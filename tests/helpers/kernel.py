@@ -1,4 +1,5 @@
-"""Walls, records and small helpers for ``tests/test_kernel.py`` (the kernel's physics tests).
+"""Walls, records and small helpers for the kernel's physics tests (`tests/test_kernel.py`, and
+`tests/test_simulate.py` for t_rest).
 
 The Table II walls of the paper are taken literally (nominal masses, MODEL.md section 2).
 Records come from the records folder as every test finds it (`tests.fixtures.records`:
@@ -14,7 +15,7 @@ import numpy as np
 import urmx
 from urmx.variables import SCALARS
 
-from .fixtures.records import record_file, records_folder
+from ..fixtures.records import record_file, records_folder
 
 G = urmx.model.PAPER_G
 
@@ -97,3 +98,12 @@ def differences(a: dict, b: dict) -> dict[str, float]:
         out[k] = 0.0 if x == y or (np.isnan(x) and np.isnan(y)) else \
             abs(x - y) / max(abs(x), abs(y))
     return out
+
+
+def c9_chatter() -> dict:
+    """C9 on a rigid base under El Centro x 0.6, contact law (a chatter that ends in a
+    hold): 132 crack impacts at t_rest = 0.01 s, 130 at 0.02 s (the held joints of
+    tests/test_kernel.py)."""
+    ag, dt = elcentro()
+    return dict(wall=SUPPORTS["rigid/flex"], ground_acceleration=ag[:301], dt=dt, scale=0.6,
+                impact="contact")

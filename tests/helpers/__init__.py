@@ -1,0 +1,19 @@
+"""What several test modules share, kept once (issue 35; ARCHITECTURE.md): synthetic records,
+stand-in kernels and study snippets, one module per study they serve, and small helpers. These
+are not test modules: test modules import from here (and from ``tests/fixtures/``) and never
+from one another (``tests/test_structure.py``). Fixtures that serve these records or make
+record folders are in ``tests/conftest.py``.
+
+- `kernel`: walls, real records and differences for the kernel's physics tests
+  (test_kernel, test_simulate);
+- `grid_study`: the small grid study, its two records and `fake_kernel` (test_study,
+  test_cells, test_study_files; `tests.fixtures.pinned`);
+- `gaps_study`: the "gaps" grid and IDA studies, their pulse records and stand-ins
+  (test_reliability, test_cluster, test_cells; `tests.fixtures.pinned`);
+- `ida_study`: the IDA stand-ins `study_kernel` and `stiff_kernel`, their records and studies
+  (test_fragility, test_risk, test_statistics; `tests.fixtures.pinned`);
+- `own_records`: a folder of one's own synthetic AT2 records and the study on it
+  (test_cells, test_nothing_silent);
+- `own_files`: the study on record files beside the study file (test_study_files, test_cells);
+- `runs`: `same_run` and `fallback_version`.
+"""

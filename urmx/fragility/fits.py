@@ -23,7 +23,7 @@ is biased low (uncensored, it is the 1/n standard deviation) and its spread depe
 sample's tails, both of which the pivot ``(ln b* - ln b) / se*`` carries over. The
 bias-corrected and accelerated (BCa) interval of Efron (1987, "Better bootstrap confidence
 intervals", JASA 82(397), eq. 2.3; `bca_interval`) and the plain percentile interval are
-options (``interval=``). Measured by simulation (``tests/test_fit_coverage.py``; README,
+options (``interval=``). Measured by simulation (``tests/test_fits.py``; README,
 "Collapse fragility"): at n = 40 the percentile interval covered the true beta in 83 % of
 sets (issue 38's check found 82.7 %), BCa in 85 %, the studentized interval in about
 90 %. With groups (``groups=``: records of one station or event), whole groups are

@@ -22,34 +22,39 @@ time. Its solution is an entire function of time, so:
   about the sub-step start. With ``nu*h <= 1`` the series converges to round-off in 10-30
   terms and the roots of event functions, their times, and the states there are found on
   it by a bracketed Newton iteration that stops on the bracket width (TIME_TOL), and a
-  root is then polished to the last few ulps (:func:`_polish`).
+  root is then polished to the last few ulps (:func:`loop._polish`).
   The state at an event is the series summed at the event time, not an interpolant.
 * A function at zero after an event (the joint that has just impacted, a joint released
   from a hold with gap, rate and acceleration zero, a branch boundary just crossed: its
   value is below what its rate covers in 1/16 of a sub-step) can come back within the
   sub-step, even twice, which the signs at the sub-step's ends do not show. On the
   sub-step after the event (and on the next one too when that was shorter than 1/16 of a
-  sub-step) its series is searched for its first fall (:func:`_first_fall`: samples
+  sub-step) its series is searched for its first fall (:func:`loop._first_fall`: samples
   growing geometrically from the start, then even ones, extrema between samples located
-  exactly), unless the series proves that it rises throughout (:func:`_rising`, after
-  most events) or that it is concave (:func:`_no_extra_fall`). This search runs after the
+  exactly), unless the series proves that it rises throughout (:func:`loop._rising`, after
+  most events) or that it is concave (:func:`loop._no_extra_fall`). This search runs after the
   one above and only an earlier fall replaces what that found, so a sub-step without
   such a fall gives the same bits as before it existed.
 
-The integration loop (:func:`_march`) is one compiled function that never allocates
+The package: this face (:func:`run`, :func:`warm_up`, :data:`STATUS`, :data:`LAWS`,
+:func:`scalars`), :mod:`urmx.kernel.loop` (the compiled loop, its helpers and the constants
+that size its arrays), :mod:`urmx.kernel.tables` (the host-side piece tables and their
+cache) and :mod:`urmx.kernel.checks` (what a wall and a record must satisfy).
+
+The integration loop (:func:`loop._march`) is one compiled function that never allocates
 (``_nrt=False``: numba's reference counting of every array passed to every helper cost
 more than the arithmetic); :func:`run` allocates its work arrays once per wall. What made
 it fast, and what each choice costs in compile time, is measured in
 ``reports/performance.md``.
 
 Event semantics (contacts, the opening rule, held joints, impacts and their laws, merged
-impacts, branch changes, collapse) live in the small functions below and are shared with
-the scipy reference solver in :mod:`urmx.reference`.
+impacts, branch changes, collapse) live in the small functions of :mod:`urmx.kernel.loop`
+and are shared with the scipy reference solver in :mod:`urmx.reference`.
 
 Documented choices (MODEL.md section 4)
 ---------------------------------------
 * Event times are bracketed to ``TIME_TOL = 1e-12 s`` and then polished to the last few
-  ulps of the time (:func:`_polish`): an event's time is the root of its function's series
+  ulps of the time (:func:`loop._polish`): an event's time is the root of its function's series
   as round-off allows, not a point of the bracket that the search happened to leave.
 * Both joints start closed; a closed joint opens when ``|g|`` exceeds
   ``g_open = 1e-6 * theta_a(Case 2)``, taking the side of ``g``. A closed (or held) joint
@@ -68,7 +73,7 @@ Documented choices (MODEL.md section 4)
   unconstrained motion of a family, at the current state, accelerates the gap away from
   zero on that family's side (``sigma * g_dd(family(sigma)) > 0``, family 2 while the
   other joint is not open; when both sides qualify at once, the side whose family is the
-  current one: :func:`release_tie`). A hold may last no time (released at once). While
+  current one: :func:`loop.release_tie`). A hold may last no time (released at once). While
   both families drive the gap back to zero (a sticking joint, which none of the four
   patterns describes) it stays held. Physically: a joint that an impact leaves slower than
   it would open g_open in t_rest is closed until the opening rule opens it again. This ends Zeno

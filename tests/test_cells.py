@@ -589,9 +589,9 @@ def test_cell_keys_follow_what_decides_a_result(grid, make_study, monkeypatch):
     # source hash above guards the results), the next release computes them again
     for version, same in (("0.2.0.post3+g1234567", True), ("0.2.0.post9+gabcdef0.dirty", True),
                           ("0.2.0+unknown", True), ("0.3.0", False)):
-        monkeypatch.setattr(urmx, "__version__", version)
+        monkeypatch.setattr(urmx.provenance, "VERSION", version)
         base = Cells(study, kinds.get("grid"), records).keys(every)
-        monkeypatch.setattr(urmx, "__version__", "0.2.0")
+        monkeypatch.setattr(urmx.provenance, "VERSION", "0.2.0")
         assert np.array_equal(base, Cells(study, kinds.get("grid"), records).keys(every)) \
             == same, version
     monkeypatch.undo()

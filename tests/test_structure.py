@@ -102,7 +102,8 @@ def loads_by_name(tree: ast.Module, modules: set[str]) -> set[str]:
     return found
 
 
-def imports(path: Path, name: str, modules: set[str] | None = None) -> set[str]:
+def imports(path: Path, name: str, modules: set[str] | None = None,
+            by_name: bool = True) -> set[str]:
     """Every module `path` (module `name`) imports, at any level (functions included; not
     under ``if TYPE_CHECKING:``, which never runs), and the package's modules it loads by
     name (:func:`loads_by_name`): absolute dotted names, a ``from x import y`` giving
@@ -110,30 +111,46 @@ def imports(path: Path, name: str, modules: set[str] | None = None) -> set[str]:
     tree = _parse(path)
     found = set()
     for node, _ in _import_nodes(tree):
-        found |= _sources(node, name, path.name == "__init__.py")
-    return found | loads_by_name(tree, modules or set())
+        sources = _sources(node, name, path.name == "__init__.py")
+        if isinstance(node, ast.ImportFrom) and modules:
+            # ``from pkg import a, b`` of modules a and b only: pkg runs on the way (an edge
+            # unless it holds the importer, see import_graph); a name it defines is taken
+            # from pkg itself
+            package = min(sources, key=len)
+            if all(f"{package}.{a.name}" in modules for a in node.names):
+                sources = sources - {package}
+        found |= sources
+    return found | (loads_by_name(tree, modules or set()) if by_name else set())
 
 
-def late_imports(path: Path, name: str, root: str) -> list[str]:
-    """``module:line -> source`` of every import of a `root` module inside a function."""
+def late_imports(path: Path, name: str, root: str, modules: set[str] | None = None) -> list[str]:
+    """``module:line -> source`` of every import of a `root` module inside a function: each
+    module of `modules` one statement loads (``from . import a, b`` gives two), else the
+    package it imports from."""
     out = []
     for node, late in _import_nodes(_parse(path)):
-        sources = _sources(node, name, path.name == "__init__.py")
-        first = sorted(sources)[0]
-        if late and first.split(".")[0] == root:
-            out.append(f"{name}:{node.lineno} -> {first}")
+        sources = sorted(_sources(node, name, path.name == "__init__.py"))
+        if not (late and sources[0].split(".")[0] == root):
+            continue
+        named = [s for s in sources[1:] if s in (modules or set())] or sources[:1]
+        out += [f"{name}:{node.lineno} -> {s}" for s in named]
     return out
 
 
 def import_graph(package: Path) -> dict[str, set[str]]:
     """Module -> the package's modules it imports or loads by name. Importing ``a.b.c`` runs
     the packages ``a`` and ``a.b`` first, so those are edges too, except packages that hold
-    the importer itself (already running when it runs)."""
+    the importer itself (already running when it runs). A name taken from the root package
+    (``from .. import __version__``), the face and its own top layer, is an edge all the
+    same: the root runs its submodules before it defines its names, so a lower module that
+    takes one depends on the face above it."""
     modules = _modules(package)
+    root = package.name
     graph = {}
     for name, path in modules.items():
         own = {".".join(name.split(".")[:i]) for i in range(1, name.count(".") + 1)}
-        edges = set()
+        explicit = imports(path, name, set(modules), by_name=False)
+        edges = {root} if root in explicit and name != root else set()
         for target in imports(path, name, set(modules)) & set(modules):
             parts = target.split(".")
             edges |= {".".join(parts[:i]) for i in range(1, len(parts) + 1)} - own - {name}
@@ -220,6 +237,8 @@ def _bad_package(tmp_path: Path) -> Path:
         "e.py": "from . import d\n", "top.py": "from .low import fine\n",
         "low/__init__.py": "", "low/fine.py": "VALUE = 1\n",
         "low/late.py": "def f():\n    from .. import top\n",
+        "low/version.py": "from .. import VERSION\n", "low/sibling.py": "from . import fine\n",
+        "low/two.py": "def f():\n    from . import fine, late\n",
         "low/lazy.py": "import importlib\n\ndef f():\n"
                        "    return importlib.import_module('pkg.top')\n",
         "low/attr.py": "def __getattr__(name):\n    import importlib\n"
@@ -245,6 +264,8 @@ def test_the_layer_and_cycle_checks_fail_on_a_bad_package(tmp_path):
     assert {"pkg.low.late -> pkg.top", "pkg.low.lazy -> pkg.top",
             "pkg.low.attr -> pkg.top"} <= set(found)
     assert not [f for f in found if f.startswith(("pkg.top", "pkg.low.fine"))]
+    assert "pkg.low.version -> pkg" in found  # a name taken from the root package
+    assert not [f for f in found if f.startswith("pkg.low.sibling")]  # a module of its own
     assert upward(import_graph(PACKAGE)) == []  # while the real package has none
 
 
@@ -256,11 +277,6 @@ LATE = {
     # load only when the guard's measurement needs them, as when its baseline was stored
     "urmx.guard:urmx.reference": "the guard's start-up process stays light",
     "urmx.guard:urmx.records.record": "the guard's start-up process stays light",
-    # the root package defines __version__ (and its public names) after its submodules load
-    "urmx.provenance:urmx": "the root package's __version__, defined after its submodules",
-    "urmx.study.dataset:urmx": "the root package's __version__",
-    "urmx.reports.grid:urmx": "the root package's __version__",
-    "urmx.study.clients:urmx": "a worker's identity probe imports urmx where it runs",
     "urmx.study.clients:urmx.jitcache": "a worker's identity probe imports urmx where it runs",
     "urmx.study.clients:urmx.provenance": "a worker's identity probe imports urmx where it runs",
 }
@@ -268,10 +284,11 @@ LATE = {
 
 def _late_outside_the_command_line(package: Path, root: str) -> list[str]:
     found = []
-    for name, path in _modules(package).items():
+    modules = _modules(package)
+    for name, path in modules.items():
         if name == f"{root}.cli" or name.startswith(f"{root}.commands"):
             continue
-        found += late_imports(path, name, root)
+        found += late_imports(path, name, root, set(modules))
     return found
 
 
@@ -288,7 +305,11 @@ def test_function_level_imports_only_in_the_command_line_and_a_named_list():
 
 def test_the_late_import_check_fails_on_a_late_import(tmp_path):
     found = _late_outside_the_command_line(_bad_package(tmp_path), "pkg")
-    assert sorted(found) == ["pkg.b:2 -> pkg.a", "pkg.c:2 -> pkg.sub", "pkg.low.late:2 -> pkg"]
+    # every module one statement loads (pkg.low.two imports two), a name from a package the
+    # package (pkg.low.late: `from .. import top`, top a module, is pkg.top)
+    assert sorted(found) == ["pkg.b:2 -> pkg.a", "pkg.c:2 -> pkg.sub.kinds",
+                             "pkg.low.late:2 -> pkg.top", "pkg.low.two:2 -> pkg.low.fine",
+                             "pkg.low.two:2 -> pkg.low.late"]
 
 
 #: the functions allowed over 80 lines: numba compiles the event loop (kernel.loop._march) and

@@ -13,16 +13,11 @@ import importlib.abc
 import importlib.machinery
 import importlib.util
 import sys
-from importlib.metadata import PackageNotFoundError, version
 
 from .config import UrmxWarning
 from .errors import UrmxError
 from .model import Wall
-
-try:
-    __version__ = version("urmx")
-except PackageNotFoundError:  # pragma: no cover - running from a bare source tree
-    __version__ = "0.0.0+unknown"
+from .provenance import VERSION as __version__
 
 __all__ = ["Wall", "simulate", "run_study", "open_study", "UrmxWarning", "UrmxError",
            "__version__"]

@@ -31,6 +31,13 @@ from typing import Any
 
 from . import jitcache
 
+try:
+    #: the installed version of urmx (``importlib.metadata``; ``0.0.0+unknown`` when urmx
+    #: runs from a source tree that was never installed): the root's ``urmx.__version__``
+    VERSION = metadata.version("urmx")
+except metadata.PackageNotFoundError:  # pragma: no cover - running from a bare source tree
+    VERSION = "0.0.0+unknown"
+
 #: libraries whose versions an archive records, as their distributions are named
 PACKAGES = ("numba", "numpy", "scipy", "xarray", "dask", "distributed", "netCDF4", "obspy")
 #: the entries of :func:`identity` that must be equal for results to be mixed
@@ -99,11 +106,11 @@ def git_release() -> str | None:
 
 def release(version: str | None = None) -> str:
     """The release part of a version (``0.2.0`` of ``0.2.0.post3+g7ab99c0``; default the
-    installed ``urmx.__version__``): what a study's cell keys hold, so cells computed at
+    installed :data:`VERSION`): what a study's cell keys hold, so cells computed at
     one commit are reused at the next one of the same release (the kernel's own source
     hash is in the keys besides, so a changed kernel never reuses them)."""
     if version is None:
-        from . import __version__ as version
+        version = VERSION
     found = re.match(r"\d+(\.\d+)*", version)
     return found.group(0) if found else version
 
@@ -112,14 +119,12 @@ def code_version() -> str:
     """The code that runs: in a git checkout, the release of the nearest tag
     (:func:`git_release`; without a tag, the installed version's public part) with the
     commit as a local label (``0.2.0+g7ab99c0``, ``0.2.0.post3+g7ab99c0.dirty``); else the
-    installed version (``urmx.__version__``)."""
-    from . import __version__
-
+    installed version (:data:`VERSION`)."""
     git = git_commit()
     if git is None:
-        return __version__
+        return VERSION
     commit, dirty = git
-    release = git_release() or __version__.split("+")[0]
+    release = git_release() or VERSION.split("+")[0]
     return f"{release}+g{commit[:7]}" + (".dirty" if dirty else "")
 
 
@@ -142,9 +147,7 @@ def identity() -> dict[str, str]:
     """What this process runs: the urmx version, :func:`source_hash`,
     `urmx.jitcache.SOURCE_HASH`, and the numba, numpy and Python versions (a worker reports
     it with every batch)."""
-    from . import __version__, jitcache
-
-    return {"urmx": __version__, "sources": source_hash(),
+    return {"urmx": VERSION, "sources": source_hash(),
             "kernel_source": jitcache.SOURCE_HASH,
             "numpy": package_version("numpy"), "numba": package_version("numba"),
             "python": sys.version.split()[0]}

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from . import __version__, provenance, reference, variables
+from . import provenance, reference, variables
 from .errors import InputError, numbers_argument
 from .kernel import check_inputs, run
 from .model import T_REST, Wall
@@ -201,6 +201,6 @@ def _attrs(wall: Wall, res: dict, *, method: str, rtol: float | None, dt: float,
     attrs.update(provenance.attrs())  # urmx_version (with the git commit), versions
     for key, value in wall.to_dict().items():
         attrs[f"wall_{key}"] = value if isinstance(value, str) else float(value)
-    attrs["history"] = (f"urmx {__version__} simulate(method={method!r}, scale={scale:g}, "
+    attrs["history"] = (f"urmx {provenance.VERSION} simulate(method={method!r}, scale={scale:g}, "
                         f"cor={cor:g}, impact={impact!r}, tail={tail:g}, t_rest={t_rest:g})")
     return attrs

@@ -309,8 +309,7 @@ def _identity_probe():
         try:
             import numpy
 
-            import urmx
-            import urmx.jitcache
+            import urmx.jitcache  # binds urmx (an older urmx may lack urmx.provenance)
 
             return {"urmx": getattr(urmx, "__version__", "?"), "numpy": numpy.__version__,
                     "kernel_source": getattr(urmx.jitcache, "SOURCE_HASH", "?")}

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .. import variables
+from .. import provenance, variables
 from ..provenance import attrs
 from ..records.record import PROVENANCE
 
@@ -80,12 +80,11 @@ def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any
     command : str or None
         The command that ran it; None: ``urmx.run_study(NAME)``.
     """
-    from .. import __version__
     cmd = command or f"urmx.run_study({study.name!r})"
     return {
         "title": study.title or study.name,
         "Conventions": "CF-1.8",
-        "history": f"{started} urmx {__version__}: {cmd}",
+        "history": f"{started} urmx {provenance.VERSION}: {cmd}",
         "study_name": study.name,
         "study": study.text,
         "t_rest": float(study.t_rest),

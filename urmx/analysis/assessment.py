@@ -43,7 +43,7 @@ def compare(archive, procedures: dict[str, Callable] | None = None, records_dir=
     Parameters
     ----------
     archive : str, path or xarray.Dataset
-        An IDA archive (`urmx ida`): ``collapse_scale`` and ``censored`` over
+        An IDA archive (`urmx run`): ``collapse_scale`` and ``censored`` over
         (wall, diaphragm, record, cor); the first cor is compared.
     procedures : dict, optional
         Name -> procedure (default `urmx.assess.PROCEDURES`, in its order).
@@ -115,7 +115,7 @@ def _open(archive) -> xr.Dataset:
     missing = [v for v in ("collapse_scale", "censored") if v not in ds]
     if missing or "cor" not in ds.dims:
         raise InputError(f"not an IDA archive (no {', '.join(missing) or 'cor dimension'}): "
-                         "write one with `urmx ida STUDY --out FILE.nc`")
+                         "write one with `urmx run STUDY --out FILE.nc`")
     return ds
 
 
@@ -190,7 +190,7 @@ def _dataset(ds, procs, wall_ids, diaphragm_ids, record_ids, cap, ida, censored,
             "long_name": "1: the procedure accepts a scale at which the wall collapses; 0: "
                          "it does not; NaN: not applicable, or unknown (censored IDA cell)"}),
     }, coords=coords)
-    out.attrs = {"title": "Assessment procedures against the IDA (urmx.assess.compare)",
+    out.attrs = {"title": "Assessment procedures against the IDA (urmx.analysis.assessment)",
                  "cor": float(ds["cor"].values[0])}
     for key in ("study_name", "urmx_git_commit", "urmx_git_dirty", "kernel_source_hash",
                 "urmx_version"):

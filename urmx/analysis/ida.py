@@ -2,7 +2,7 @@
 capacities with the diaphragm's frequency, the effect of stiffening a diaphragm, the rank
 correlation of collapse intensities with slenderness, and, from the capacities in every
 intensity measure that one run holds, the efficiency and sufficiency of each measure and the
-collapse risk at a site (drawn by `urmx.plot`, reported by `urmx.fragility_report` and
+collapse risk at a site (drawn by `urmx.plot`, reported by `urmx.reports.ida` and
 `urmx risk`)."""
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def require_measures(ds: xr.Dataset) -> None:
                if n not in ds]
     if missing:
         raise InputError(f"the IDA archive lacks {', '.join(missing)} (written by an older "
-                         "urmx): run the study again with `urmx ida` to write them")
+                         "urmx): run the study again with `urmx run` to write them")
 
 
 def record_groups(ds: xr.Dataset, records_dir=None) -> np.ndarray | None:

@@ -12,7 +12,7 @@ archive (a sampling-IDA study of walls drawn in geometry, `urmx.uncertainty.samp
 - :func:`resonance`: the capacity's dependence on the record's dominant frequency over the
   diaphragm's and on ``Sa(T_d) / PGA``, and the by-hand rule fitted to it.
 
-The report (`urmx.predictors_report`) draws and writes them.
+The report (`urmx.reports.predictors`) draws and writes them.
 """
 
 from __future__ import annotations

@@ -131,7 +131,7 @@ def recompute(archive: Any, wall: str, diaphragm: str, record: str, *,
     Parameters
     ----------
     archive : path
-        A study archive (``urmx run``, ``urmx ida``).
+        A study archive (``urmx run``).
     wall, diaphragm, record : str
         The cell's labels.
     cor, scale, impact, damping : optional

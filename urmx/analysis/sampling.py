@@ -2,7 +2,7 @@
 sample gives per wall and diaphragm, its sensitivity to the sampled parameters, how the
 spread of the results splits into record-to-record and modelling parts, and the paper's
 findings (the D1 -> D4 stiffening, the slenderness trend, the resonance) per impact law
-(reported by `urmx.uncertainty_report`).
+(reported by `urmx.reports.sampling`).
 
 The output of a sample is, with collapse capacities, the log of its median collapse
 intensity over the records (``ln median_collapse_intensity``); with time histories, the
@@ -167,7 +167,7 @@ def spread(ds: xr.Dataset) -> xr.Dataset:
 # ---- the paper's findings per impact law ------------------------------------------------------
 
 def as_ida(ds: xr.Dataset, j: int) -> xr.Dataset:
-    """Sample `j` as an IDA archive of one COR (what `urmx.fragility_analysis` reads): its
+    """Sample `j` as an IDA archive of one COR (what `urmx.analysis.ida` reads): its
     capacities, fits and cell frequencies over (wall, diaphragm, record, cor)."""
     sub = ds.isel(sample=[j])
     drop = [n for n in sub.coords if "sample" in sub[n].dims and n not in (
@@ -183,7 +183,7 @@ def laws(ds: xr.Dataset) -> list[str]:
 
 
 def findings(ds: xr.Dataset) -> dict[str, dict]:
-    """The paper's findings computed for each sample as `urmx.fragility_report` computes
+    """The paper's findings computed for each sample as `urmx.reports.ida` computes
     them for one model, gathered per impact law: ``stiffening`` (group -> (sample, wall)
     ratios of the D4 to the D1 median), ``slenderness`` ((sample, diaphragm) Spearman rho of
     the median with h/t over the walls), ``resonance`` (the pooled resonance table)."""

@@ -36,7 +36,7 @@ def register(sub) -> None:
         "assess-report", help="the assessment procedures against an IDA archive -> "
                               "reports/assessment/",
         description="Compares every procedure of urmx.assess with the IDA collapse scales "
-                    "of an archive (`urmx ida fema-p695-ida --out FILE.nc`): shares of "
+                    "of an archive (`urmx run fema-p695-ida --out FILE.nc`): shares of "
                     "unconservative and conservative (wall, record) pairs per diaphragm, "
                     "median and dispersion of the capacity ratio, figures and findings, in "
                     "REPORT.md.")

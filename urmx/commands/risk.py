@@ -3,7 +3,7 @@ risk of every wall and diaphragm of an IDA archive at a site, from the capacitie
 holds (no new analyses), with where each rate comes from (its deaggregation by intensity and
 the share from beyond the hazard file's computed intensities); or ``urmx risk --median M
 --dispersion B --im IM --hazard curve.csv`` for one fragility given by hand, which must be
-in the hazard curve's measure. A thin command over `urmx.fragility_analysis`."""
+in the hazard curve's measure. A thin command over `urmx.analysis.ida`."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def register(sub) -> None:
                     "median capacity in sa_wall over the design Sa at the wall's rocking "
                     "period. Prints Markdown tables. Without an archive, --median, "
                     "--dispersion and --im give one fragility.")
-    p.add_argument("archive", metavar="FILE.nc", nargs="?", help="IDA archive (`urmx ida`)")
+    p.add_argument("archive", metavar="FILE.nc", nargs="?", help="IDA archive (`urmx run`)")
     p.add_argument("--hazard", required=True, metavar="CURVE.csv",
                    help="hazard curve: CSV with the header 'pga [g],annual_rate [1/yr]' (the "
                         "measure: pga, pgv, sa_wall, sa_diaphragm, sa_avg or sa(T)), e.g. "

@@ -1,6 +1,6 @@
 """``urmx show ARCHIVE --wall W --diaphragm D --record R [--cor C --scale S] --plot FILE.png
 [--out cell.nc]``: one cell of a study archive computed again with its histories and drawn
-(`urmx.recompute`)."""
+(`urmx.analysis.recompute`)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def register(sub) -> None:
                     "the displacements at crack height and top, the rocking pattern, the "
                     "ground motion beneath and the instability ratio; --out keeps the "
                     "histories. Exit 1 when a scalar differs from the archive's.")
-    p.add_argument("archive", metavar="ARCHIVE", help="study archive (urmx run, urmx ida)")
+    p.add_argument("archive", metavar="ARCHIVE", help="study archive (urmx run)")
     p.add_argument("--wall", required=True, help="the cell's wall")
     p.add_argument("--diaphragm", required=True, help="the cell's diaphragm")
     p.add_argument("--record", required=True, help="the cell's record")

@@ -14,8 +14,8 @@ from ..kernel import warm_up
 from ..study.clients import get_client, owning
 from ..study.engine import run_study
 
-#: the catalog studies of the paper, in the order `urmx paper` runs them (`urmx.report`
-#: reads their archives)
+#: the catalog studies of the paper, in the order `urmx paper` runs them
+#: (`urmx.reports.paper` reads their archives)
 STUDIES = ("paper-single-storey", "paper-multi-storey", "verification",
            "verification-intensity")
 

@@ -82,7 +82,7 @@ def _band(cap: np.ndarray, cen: np.ndarray, x: np.ndarray, groups=None) -> tuple
 def plot_fragility_curves(ds: xr.Dataset, axes=None, band: bool = True) -> list:
     """Fitted collapse fragility of each wall (colour by slenderness) with its bootstrap
     band (shaded: the pointwise 90 % range over 200 resamples of the records, whole
-    groups of them where the records have groups: `urmx.fragility_analysis.record_groups`),
+    groups of them where the records have groups: `urmx.analysis.ida.record_groups`),
     one panel per diaphragm, with the records' capacities as empirical distributions
     (dots)."""
     from scipy.stats import norm
@@ -184,7 +184,7 @@ def plot_median(ds: xr.Dataset, against: str = "slenderness", axes=None) -> list
 def plot_capacity_resonance(t: xr.Dataset, axes=None) -> list:
     """Each capacity relative to the same wall and record on the group's other flexible
     diaphragms against the ratio of the record's predominant frequency to the diaphragm's
-    (`urmx.fragility_analysis.resonance_table`), with the binned medians; one panel per
+    (`urmx.analysis.ida.resonance_table`), with the binned medians; one panel per
     supports group."""
     groups = [g for g in FA.GROUPS if g in set(t.group.values)]
     axes = panels(axes, max(1, len(groups)), ncols=2)
@@ -209,7 +209,7 @@ def plot_capacity_resonance(t: xr.Dataset, axes=None) -> list:
 
 def plot_stiffening(st: dict, ds: xr.Dataset, ax=None):
     """The ratio of median collapse intensities, stiffened over as-built diaphragm, against
-    slenderness (`urmx.fragility_analysis.stiffening`), one line per supports group."""
+    slenderness (`urmx.analysis.ida.stiffening`), one line per supports group."""
     ax = ax if ax is not None else panels(None, 1)[0]
     for g, v in st.items():
         ax.plot(ds.slenderness, v["ratio"], "o-", ms=marker_size(ds.wall.size, 6, 3),
@@ -224,7 +224,7 @@ def plot_stiffening(st: dict, ds: xr.Dataset, ax=None):
 
 def plot_efficiency(eff: xr.Dataset, ax=None):
     """The dispersion of the collapse capacities in each intensity measure per diaphragm
-    (`urmx.fragility_analysis.efficiency`): one dot per wall, a bar at the median over the
+    (`urmx.analysis.ida.efficiency`): one dot per wall, a bar at the median over the
     walls."""
     ax = ax if ax is not None else panels(None, 1, ncols=1)[0]
     if ax.figure.get_figwidth() < 8:
@@ -255,7 +255,7 @@ def plot_efficiency(eff: xr.Dataset, ax=None):
 def plot_collapse_risk(risk: xr.Dataset, curve, axes=None) -> list:
     """The hazard curve (with the walls' median capacities marked) and the mean annual
     frequency of collapse against slenderness, one line per diaphragm, per supports group
-    (`urmx.fragility_analysis.collapse_risk`)."""
+    (`urmx.analysis.ida.collapse_risk`)."""
     groups = FA.supports_groups(risk) if "supports" in risk.coords else {
         "top": [str(x) for x in risk.diaphragm.values]}
     axes = panels(axes, 1 + len(groups), ncols=1 + len(groups))

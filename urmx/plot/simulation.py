@@ -49,7 +49,7 @@ def plot_simulation(ds: xr.Dataset, axes: Sequence[Axes] | None = None) -> list[
     return [ax1, ax2]
 
 
-# ---- collapse fragility (IDA archives, `urmx.fragility_analysis`) ---------------------------
+# ---- collapse fragility (IDA archives, `urmx.analysis.ida`) ---------------------------------
 
 
 def instability_history(ds: xr.Dataset, wall) -> xr.DataArray:

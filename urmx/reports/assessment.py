@@ -1,13 +1,14 @@
 """``reports/assessment/``: the assessment procedures (`urmx.assess`) against urmx's IDA.
 
-`write_report` runs `urmx.assess.compare` on an IDA archive and writes ``REPORT.md`` with:
-the procedures and what of each could be applied; per procedure and diaphragm (single storey
-and higher storey apart) the share of (wall, record) pairs where the procedure is
-unconservative (it accepts a record scale at which the wall collapses) and conservative, and
-the median and dispersion of ``ratio`` (its capacity scale over the IDA's); one figure per
-applicable procedure of its median capacity scale against urmx's, per wall and diaphragm; and
-findings written from those numbers (which procedure is unconservative for which diaphragms,
-by how much, and whether diaphragm flexibility is what makes it so: D1-D2 against D4-D5).
+`write_report` runs `urmx.analysis.assessment.compare` on an IDA archive and writes
+``REPORT.md`` with: the procedures and what of each could be applied; per procedure and
+diaphragm (single storey and higher storey apart) the share of (wall, record) pairs where
+the procedure is unconservative (it accepts a record scale at which the wall collapses) and
+conservative, and the median and dispersion of ``ratio`` (its capacity scale over the
+IDA's); one figure per applicable procedure of its median capacity scale against urmx's, per
+wall and diaphragm; and findings written from those numbers (which procedure is
+unconservative for which diaphragms, by how much, and whether diaphragm flexibility is what
+makes it so: D1-D2 against D4-D5).
 ``comparison.csv`` holds the table's numbers.
 """
 
@@ -209,7 +210,7 @@ def write_report(archive, out_dir: str | os.PathLike = "reports/assessment",
                  records_dir=None, **compare_options) -> Path:
     """Compare the procedures with the IDA archive and write ``out_dir/REPORT.md``, its
     figures and ``comparison.csv`` (module docstring); `compare_options` go to
-    `urmx.assess.compare` (``walls=``, ``records=``). Returns the report's path."""
+    `urmx.analysis.assessment.compare` (``walls=``, ``records=``). Returns the report's path."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     c = compare(archive, records_dir=records_dir, **compare_options)
@@ -238,7 +239,7 @@ def _header(c: xr.Dataset, archive) -> list[str]:
         "# Assessment procedures against the dynamics",
         "",
         f"Regenerate: `urmx assess-report {name} --out reports/assessment` (after "
-        f"`urmx ida fema-p695-ida --out {name}`).",
+        f"`urmx run fema-p695-ida --out {name}`).",
         "",
         f"- Archive: `{name}`, study `{a.get('archive_study_name', '?')}`, made by urmx "
         f"commit `{a.get('archive_urmx_git_commit', '?')}`{dirty}, kernel source hash "

@@ -1,4 +1,4 @@
-"""What both reports (`urmx.report`, `urmx.fragility_report`) share: opening a study archive
+"""What both reports (`urmx.reports.paper`, `urmx.reports.ida`) share: opening a study archive
 with a clear error, and saving a figure as a PNG with its Markdown link. (Quantities are
 shown in g and mm by `urmx.plot.display_scale`.)"""
 

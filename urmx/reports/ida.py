@@ -1,4 +1,4 @@
-"""``reports/fragility/``: figures and tables of an IDA archive (`urmx ida`).
+"""``reports/fragility/``: figures and tables of an IDA archive (`urmx run`).
 
 ``write_report(archive, out_dir)`` writes ``REPORT.md`` and PNGs:
 
@@ -22,7 +22,7 @@ The fragility curves carry their 90 % bootstrap bands; the sections "Which inten
 measure predicts collapse best?" (efficiency, sufficiency against the records' magnitude
 and distance) and "Collapse risk" (a hazard curve, a design spectrum: by default the
 illustrative ones of ``catalog/hazard/``) are computed from the archive without new
-analyses (`urmx.fragility_analysis`).
+analyses (`urmx.analysis.ida`).
 
 A section an archive cannot answer is left out and named, with what it needs: the
 slenderness section a rank correlation over `MIN_WALLS` walls, the resonance section two
@@ -85,7 +85,7 @@ def default_site() -> tuple[Path, Path]:
     return catalog_dir() / "hazard" / HAZARD, catalog_dir() / "hazard" / SPECTRUM
 
 # the figures and reductions this report used to hold, where they live now (urmx.plot,
-# urmx.fragility_analysis), under their names here too
+# urmx.analysis.ida), under their names here too
 __all__ = ["write_report", "open_ida", "plot_ida_curves", "plot_fragility_curves",
            "plot_median", "plot_resonance", "plot_stiffening", "resonance_table", "stiffening",
            "GROUPS", "STIFFEN"]
@@ -100,12 +100,12 @@ def open_ida(archive) -> xr.Dataset:
     if "collapse_intensity" not in ds:
         raise InputError(f"{archive if not isinstance(archive, xr.Dataset) else 'Dataset'}: "
                          "not an IDA archive (no collapse_intensity); write one with "
-                         "`urmx ida STUDY --out FILE.nc`")
+                         "`urmx run STUDY --out FILE.nc`")
     return ds
 
 
 def _save(axes, out: Path, name: str) -> str:
-    """A palette PNG at 90 dpi (`urmx.reporting.save_figure`) and its link."""
+    """A palette PNG at 90 dpi (`urmx.reports.common.save_figure`) and its link."""
     return save_figure(axes, out, name, dpi=90, palette=True)
 
 
@@ -125,7 +125,7 @@ def write_report(archive, out_dir: str | os.PathLike, hazard=None, spectrum=None
     Parameters
     ----------
     archive : path or Dataset
-        An archive written by ``urmx ida`` (`urmx.run_study` of a study with
+        An archive written by ``urmx run`` (`urmx.run_study` of a study with
         ``[study.ida]``).
     out_dir : path
         Created if needed; figures of the same names are replaced.
@@ -214,7 +214,7 @@ def _header(ds: xr.Dataset, d: xr.Dataset) -> list[str]:
 def refit(d: xr.Dataset, groups) -> xr.Dataset:
     """The archive at one COR with the median, the dispersion and their intervals fitted
     again from its capacities by `urmx.fragility.fit_lognormal` (studentized bootstrap,
-    whole `groups` of records resampled when given: `fragility_analysis.fit_cells`),
+    whole `groups` of records resampled when given: `urmx.analysis.ida.fit_cells`),
     whatever method the archive's own intervals came from."""
     out = FA.fit_cells(d.collapse_intensity.transpose("wall", "diaphragm", "record").values,
                        d.censored.transpose("wall", "diaphragm", "record").values, groups)

@@ -4,7 +4,7 @@ collapse risk (annual rate, probability, the change when the diaphragm is stiffe
 margin over a design spectrum), and the tables ``urmx risk`` prints (`risk_lines`).
 
 Nothing here runs an analysis: the capacities in every measure are the scale factors at
-collapse times each record's measure (`urmx.fragility_analysis.capacities`).
+collapse times each record's measure (`urmx.analysis.ida.capacities`).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from .common import (
 LEVEL = f"{100 * CONFIDENCE:g} %"
 MIN_RISK = 10**9  # an archive of risk numbers made without a record count: intervals kept
 OLDER = ("_Not available: the archive lacks the scale factor at collapse and the records' "
-         "measures (written by an older urmx); run `urmx ida` again._")
+         "measures (written by an older urmx); run `urmx run` again._")
 
 
 def _save(axes, out: Path, name: str) -> str:
@@ -65,7 +65,7 @@ def _has_measures(ds: xr.Dataset) -> bool:
 # ---- which measure predicts collapse best ----------------------------------------------------
 
 def measure_numbers(ds: xr.Dataset, records_dir=None) -> dict | None:
-    """Efficiency (`urmx.fragility_analysis.efficiency`), sufficiency against the records'
+    """Efficiency (`urmx.analysis.ida.efficiency`), sufficiency against the records'
     magnitude and distance (None when the records' catalog does not give them) and the
     dispersion in ``sa_avg`` over other period ranges (empty without the records); None
     for an archive without the measures."""
@@ -253,7 +253,7 @@ def _sufficiency(m: dict) -> list[str]:
         "p < 0.05 by chance, though the cases share their records, so they are not "
         "independent. The p-values "
         + ("resample " + FA.grouping_sentence(m.get("groups")) + " (cluster bootstrap of the "
-           "slope, `urmx.fragility_analysis.group_slope_p`): the two components of a station "
+           "slope, `urmx.analysis.ida.group_slope_p`): the two components of a station "
            "share its magnitude and distance, and a t-test would count them twice."
            if m.get("groups") is not None else "are the t-test's (the records carry no "
            "`group`)."), "",
@@ -263,7 +263,7 @@ def _sufficiency(m: dict) -> list[str]:
 
 def _measure_table(ds: xr.Dataset, eff: xr.Dataset, intervals: bool = True) -> list[str]:
     """Every wall and diaphragm's dispersion in each measure, with its interval when
-    `intervals` (enough records), a degenerate one flagged (`urmx.reporting.interval`)."""
+    `intervals` (enough records), a degenerate one flagged (`urmx.reports.common.interval`)."""
     rows = []
     def two(v):
         return _fmt(v, 2)
@@ -295,7 +295,7 @@ def risk_numbers(ds: xr.Dataset, hazard, spectrum, years: float, records_dir=Non
     """The collapse risk per (wall, diaphragm) over `hazard` (with its deaggregation and
     extrapolated share), its change when the diaphragm is stiffened, and the margins over
     `spectrum` (None without the measures). The bootstraps resample the records' groups
-    (`urmx.fragility_analysis.record_groups`) when they have them."""
+    (`urmx.analysis.ida.record_groups`) when they have them."""
     if not _has_measures(ds):
         return None
     curve = hazard if isinstance(hazard, HazardCurve) else read_hazard(hazard, site)

@@ -6,9 +6,9 @@ into a folder.
 Regenerate the committed report with::
 
     urmx run wall-population --out results/wall-population.nc
-    python -m urmx.predictors_report results/wall-population.nc --out reports/predictors
+    python -m urmx.reports.predictors results/wall-population.nc --out reports/predictors
 
-The analysis is `urmx.predictors_analysis`; the ranking `urmx.fragility.ranking`; the
+The analysis is `urmx.analysis.predictors`; the ranking `urmx.fragility.ranking`; the
 predictors `urmx.fragility.predictors`.
 """
 
@@ -466,7 +466,7 @@ def _header(ds, a: dict[str, Any], run: float | None) -> list[str]:
         if run else "not known"
     return ["# Which wall parameter predicts collapse (issue 37)", "",
             "Regenerate: `urmx run wall-population --out results/wall-population.nc` then "
-            "`python -m urmx.predictors_report results/wall-population.nc --out "
+            "`python -m urmx.reports.predictors results/wall-population.nc --out "
             "reports/predictors`.", "",
             "| | |", "|---|---|",
             f"| study | `{ds.attrs.get('study_name')}` (catalog/studies/wall-population.toml) |",
@@ -523,7 +523,7 @@ def _body(a: dict[str, Any], figs: list[str], replicates: int, seconds: float) -
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m urmx.predictors_report",
+    parser = argparse.ArgumentParser(prog="python -m urmx.reports.predictors",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("archive", help="a wall-population archive (urmx run wall-population)")
     parser.add_argument("--out", default="reports/predictors", help="folder of the report")

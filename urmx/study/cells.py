@@ -106,7 +106,7 @@ class Cells:
 
     Parameters
     ----------
-    study : urmx.catalog.Study
+    study : urmx.study.file.Study
     kind : urmx.study.kinds.Kind
     records : dict of urmx.records.Record
         The study's records by id (their digests are part of the keys).

@@ -73,7 +73,7 @@ def global_attrs(study: Any, started: str, command: str | None) -> dict[str, Any
 
     Parameters
     ----------
-    study : urmx.catalog.Study
+    study : urmx.study.file.Study
         The study, as loaded from its file.
     started : str
         When the run started (ISO 8601).
@@ -201,7 +201,7 @@ def grid_coords(study: Any, records: dict) -> dict[str, xr.Variable]:
 
     Parameters
     ----------
-    study : urmx.catalog.Study
+    study : urmx.study.file.Study
         The study, as loaded from its file.
     records : dict
         The study's records by id (:func:`resolve_records`).

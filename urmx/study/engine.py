@@ -575,7 +575,7 @@ def run_grid(study: Study, records: dict, scheduler: Any = "serial", *,
         The Dataset :func:`run_study` returns without an archive (in memory).
     """
     if not isinstance(study, Study):
-        raise InputError(f"run_grid: study must be a urmx.catalog.Study (urmx.catalog."
+        raise InputError(f"run_grid: study must be a urmx.study.file.Study (urmx.study.file."
                          f"load_study), got {got(study)}")
     if not isinstance(records, dict):
         raise InputError(f"run_grid: records must be a dict of records by id, got "

@@ -4,7 +4,7 @@ the limits above which a run stops before any work.
 The limits (:data:`MAX_CELLS`, :data:`MAX_GB`) are the defaults of ``urmx run --max-cells /
 --max-gb`` and of `urmx.run_study`. :data:`MAX_VALUES` bounds one dimension: a range
 ``{start, stop, step}`` is counted from its three numbers before its values are made
-(`urmx.catalog.load_study`), so a step typed too small (1e-9 for 1e-2) is refused at once
+(`urmx.study.file.load_study`), so a step typed too small (1e-9 for 1e-2) is refused at once
 with the file, key and line, instead of filling the memory.
 
 Why these defaults: the engine keeps 8 bytes per cell of the grid in the main process for
@@ -82,7 +82,7 @@ def size_of(study: Any, kind: Any) -> Size:
 
     Parameters
     ----------
-    study : urmx.catalog.Study
+    study : urmx.study.file.Study
         The study, as loaded from its file.
     kind : urmx.study.kinds.Kind
         Its kind.
@@ -102,7 +102,7 @@ def check_size(study: Any, kind: Any, max_cells: float | None = MAX_CELLS,
 
     Parameters
     ----------
-    study : urmx.catalog.Study
+    study : urmx.study.file.Study
         The study, as loaded from its file.
     kind : urmx.study.kinds.Kind
         Its kind.

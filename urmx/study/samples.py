@@ -31,7 +31,7 @@ def resolve_records(study, records_dir: str | os.PathLike | None = None) -> dict
 
     Parameters
     ----------
-    study : urmx.catalog.Study
+    study : urmx.study.file.Study
         The study, as loaded from its file.
     records_dir : str or path-like, optional
         Records folder of the manifest ids (default :func:`urmx.config.records_dir`).

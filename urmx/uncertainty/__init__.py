@@ -15,7 +15,7 @@ with no study, dask or xarray in it.
   together (:func:`modelling_fit`).
 
 The sampling study kind that runs them is `urmx.study.kinds.sampling`; its report is
-`urmx.uncertainty_report`.
+`urmx.reports.sampling`.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ asks which one it is: it parses nothing, cuts nothing and assembles nothing itse
     (``Study.tables``) and refuses any other ``[study.<name>]`` with file, key and line.
 ``keys`` : tuple of str
     The keys its ``[study.<table>]`` accepts (its ``parse`` refuses any other);
-    `urmx.catalog.file_keys` lists them with every other study-file key, and
+    `urmx.study.file.file_keys` lists them with every other study-file key, and
     ``docs/study-files.md`` must describe them (``tests/test_study_files.py``).
 ``combines`` : tuple of str
     Other kinds' tables this kind reads as well (a study with several kind tables is the
@@ -32,7 +32,7 @@ asks which one it is: it parses nothing, cuts nothing and assembles nothing itse
     Validates the kind's table(s) and the study's grid for this kind (raising
     ``study.error(key, message, *needles)``, a `urmx.catalog.CatalogError` naming file,
     key and line) and returns its settings, stored as ``Study.settings``. Called by
-    `urmx.catalog.load_study`, so a bad table fails before any work. The settings are part
+    `urmx.study.file.load_study`, so a bad table fails before any work. The settings are part
     of every cell's identity (a dataclass by its fields).
 ``dims(study) -> dict``
     The kind's cell dimensions and their values, in archive order (default

@@ -389,7 +389,7 @@ class Wall:
         -------
         Wall
             Bitwise the wall the catalog builds for a parametric wall on a diaphragm
-            (`urmx.catalog.Study.wall`).
+            (`urmx.study.file.Study.wall`).
         """
         positive = _building_number
         density = positive("density", density)

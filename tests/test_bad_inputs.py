@@ -24,9 +24,8 @@ from urmx.config import records_dir as _records_dir
 from urmx.reports import ida as FR
 from urmx.study.file import load_study
 
-AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
-       "ACCELERATION TIME SERIES IN UNITS OF G\nNPTS=  8, DT=   {dt} SEC\n"
-       "  1.0E-02  2.0E-02  3.0E-02 -2.0E-02 -1.0E-02\n  0.0E+00  1.0E-02  0.0E+00\n")
+from .helpers.synthetic import at2_text
+
 WALL = "thickness = 0.23\nheight = 4.14\ncrack_ratio = 0.6667\nmass = 3000.0\n"
 STUDY = ('[study]\nname = "bad"\nwalls = ["s18"]\ndiaphragms = ["D1"]\nrecords = ["{rec}"]\n'
          "cor = {cor}\n{extra}")
@@ -42,9 +41,9 @@ def files(tmp_path_factory) -> dict[str, Path]:
         (p.write_bytes if mode == "wb" else p.write_text)(text)
         out[name.split(".")[0]] = p
 
-    put("at2.AT2", AT2.format(dt=".0100"))
-    put("at2_dt0.AT2", AT2.format(dt=".0000"))
-    put("at2_dtneg.AT2", AT2.format(dt="-.0100"))
+    put("at2.AT2", at2_text())
+    put("at2_dt0.AT2", at2_text(dt=".0000"))
+    put("at2_dtneg.AT2", at2_text(dt="-.0100"))
     put("plain.txt", "0.01\n0.02\n-0.01\n0.0\n")
     put("pickle.dat", b"cobspy.core.stream\nStream\n0(lp0\n.", "wb")
     put("empty.dat", "")

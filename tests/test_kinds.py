@@ -27,7 +27,7 @@ from urmx.study.file import load_study
 
 from .fixtures.signals import killed_after_parts
 from .helpers.runs import same_run
-from .helpers.synthetic import DT
+from .helpers.synthetic import DT, SAMPLING_ACC
 from .helpers.synthetic import TOY_ACC as ACC
 from .helpers.synthetic import TOY_SCALE as SCALE
 
@@ -181,8 +181,7 @@ def test_a_batch_of_each_kind_imports_numpy_only(make_study, tmp_path, extra):
     record's predominant frequency there."""
     from urmx.records import Record
 
-    t = np.arange(400) * 0.01
-    acc = 3.0 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-0.3 * t)
+    acc = SAMPLING_ACC["quake"]
     path = make_study('[study]\nwalls = ["s16"]\ndiaphragms = ["D1"]\nrecords = ["x"]\n'
                       "cor = [0.8]\n" + extra, "batch.toml")
     study = load_study(path)

@@ -23,16 +23,16 @@ from urmx import UrmxError
 from urmx.cli import main
 from urmx.records.readers import detect as readers  # where _detect_obspy and SNIFF_BYTES live
 
+from .helpers.synthetic import AT2_ROWS, at2_text
+
 G_N = 9.80665
-AT2 = ("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
-       "ACCELERATION TIME SERIES IN UNITS OF {unit}\nNPTS=  8, DT=   {dt} SEC\n"
-       "  {v0}  2.0E-02  3.0E-02 -2.0E-02 -1.0E-02\n  0.0E+00  1.0E-02  0.0E+00\n")
 WAVE = 0.1 * np.sin(np.arange(200) * 0.1)  # [g]
 
 
 def at2(tmp_path, unit="G", dt=".0100", v0="1.0E-02", name="rec.AT2") -> Path:
+    """The eight-value AT2 record of `tests.helpers.synthetic`, `v0` its first value."""
     path = tmp_path / name
-    path.write_text(AT2.format(unit=unit, dt=dt, v0=v0))
+    path.write_text(at2_text(AT2_ROWS.replace("1.0E-02", v0, 1), unit=unit, dt=dt))
     return path
 
 
@@ -238,7 +238,7 @@ def test_a_file_of_one_number(tmp_path):
 @pytest.mark.parametrize(("make", "needle"), [
     (lambda p: p.write_bytes(gzip.compress(b"0.1\n0.2\n")),
      "file is gzip-compressed, not a record file: decompress it first (gunzip FILE)"),
-    (lambda p: zipfile.ZipFile(p, "w").writestr("rec.AT2", AT2),
+    (lambda p: zipfile.ZipFile(p, "w").writestr("rec.AT2", at2_text()),
      "file is a zip archive, not a record file: unpack it first (unzip FILE)"),
     (lambda p: p.write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(100)), "an HDF5 or netCDF-4 file"),
     (lambda p: p.write_text("<!DOCTYPE html>\n<html><body>Not found</body></html>\n"),

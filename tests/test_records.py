@@ -13,6 +13,8 @@ import urmx.records as R
 from urmx import UrmxWarning
 from urmx.config import shipped_records
 
+from .helpers.synthetic import at2_rows, at2_text
+
 G_N = 9.80665  # standard gravity g_n [m s-2] (records in units of g)
 
 
@@ -123,12 +125,8 @@ def test_refused_files(shared_records, file, match):
 def at2(tmp_path):
     def make(npts_header=8, values=None, unit="G"):
         values = np.arange(1, 9) * 0.01 if values is None else values
-        body = "\n".join("  ".join(f"{v:.7E}" for v in values[i:i + 5])
-                         for i in range(0, len(values), 5))
         path = tmp_path / "rec.AT2"
-        path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\nTest, 1/1/2000, Somewhere, 90\n"
-                        f"ACCELERATION TIME SERIES IN UNITS OF {unit}\n"
-                        f"NPTS=  {npts_header}, DT=   .0100 SEC\n{body}\n")
+        path.write_text(at2_text(at2_rows(values), unit=unit, npts=npts_header))
         return path
     return make
 

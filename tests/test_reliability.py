@@ -49,6 +49,7 @@ from .helpers.gaps_study import (
     slow_kernel,
 )
 from .helpers.runs import Interrupt
+from .helpers.synthetic import at2_text
 
 
 @pytest.fixture
@@ -316,9 +317,10 @@ def test_safe_obspy_formats_are_still_detected(tmp_path):
 
 @pytest.mark.parametrize("dt_text", [".0000", "-.0100"])
 def test_header_dt_not_positive_is_refused(tmp_path, dt_text):
+    """Through the API, both signs, the file named in the message (``test_bad_inputs`` holds
+    the CLI's one line for both, but the API's error for dt = 0 only, on another file)."""
     path = tmp_path / "rec.AT2"
-    path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\nTest\nACCELERATION TIME SERIES "
-                    f"IN UNITS OF G\nNPTS=  4, DT=   {dt_text} SEC\n 0.1 0.2 0.1 0.0\n")
+    path.write_text(at2_text(" 0.1 0.2 0.1 0.0\n", title="Test", npts=4, dt=dt_text))
     with pytest.raises(urmx.records.MissingTimeStepError, match=r"dt=-?0\.0?1?0* s") as err:
         urmx.records.read(path)
     assert str(path) in str(err.value)

@@ -15,5 +15,10 @@ record folders are in ``tests/conftest.py``.
 - `own_records`: a folder of one's own synthetic AT2 records and the study on it
   (test_cells, test_nothing_silent);
 - `own_files`: the study on record files beside the study file (test_study_files, test_cells);
-- `runs`: `same_run` and `fallback_version`.
+- `synthetic`: small synthetic records of the plug-in kind tests (`TOY_ACC`, `SWEEP_ACC`,
+  `PULSE`, `SAMPLING_ACC`, sampled at `DT`; test_kinds, test_cells, test_sampling) and the
+  one template of synthetic PEER AT2 record files, `at2_text`, `at2_rows`, `AT2_ROWS`
+  (test_bad_inputs, test_readers, test_records, test_reliability; `own_records`);
+- `runs`: `Interrupt` (what a stand-in kernel raises for Ctrl-C), `same_run` and
+  `fallback_version`.
 """

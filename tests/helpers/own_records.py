@@ -17,6 +17,7 @@ from urmx import study as st
 
 from .grid_study import fake_kernel
 from .runs import Interrupt
+from .synthetic import at2_rows, at2_text
 
 
 def counting(calls: list, stop: int | None = None):
@@ -45,10 +46,8 @@ def write_at2(path: Path, peak: float, n: int = 120) -> None:
     """A PEER AT2 record: a decaying 2 Hz sine of `peak` g, dt 0.01 s."""
     t = np.arange(n) * 0.01
     acc = peak * np.sin(2 * np.pi * 2.0 * t) * np.exp(-t)
-    rows = [" ".join(f"{v: .7E}" for v in acc[i:i + 5]) for i in range(0, n, 5)]
-    path.write_text("PEER NGA STRONG MOTION DATABASE RECORD\nsynthetic test record\n"
-                    "ACCELERATION TIME SERIES IN UNITS OF G\n"
-                    f"NPTS= {n:5d}, DT= .0100 SEC\n" + "\n".join(rows) + "\n")
+    path.write_text(at2_text(at2_rows(acc, fmt=" .7E", sep=" "), title="synthetic test record",
+                             npts_line=f"NPTS= {n:5d}, DT= .0100 SEC"))
 
 
 def index_folder(folder: Path) -> None:

@@ -7,7 +7,14 @@ the tests' expected numbers rest on); every set is sampled at `DT`.
 - `PULSE`, `PULSE_SCALE`: a 2 Hz sine of 3.0 m s-2, 150 samples (`tests/test_cells.py`, the
   real kernel);
 - `SAMPLING_ACC`, `SAMPLING_SCALE`: two decaying sines of 4 s, "quake" 2 Hz 3.0 m s-2 and
-  "shake" 1.2 Hz 2.5 m s-2 (`tests/test_sampling.py`)."""
+  "shake" 1.2 Hz 2.5 m s-2 (`tests/test_sampling.py`, `tests/test_kinds.py`).
+
+And the text of synthetic PEER NGA AT2 record files, from one template: `at2_text` (four
+header lines, then data lines), `AT2_ROWS` (its default data: eight values in g) and
+`at2_rows` (data lines from numbers). The tests assert exact messages, digests and values
+on these files, so each caller states what it changes and the rest stays byte for byte
+(`tests/test_bad_inputs.py`, `tests/test_readers.py`, `tests/test_records.py`,
+`tests/test_reliability.py`, `tests.helpers.own_records.write_at2`)."""
 
 from __future__ import annotations
 
@@ -29,3 +36,22 @@ _t = np.arange(400) * DT
 SAMPLING_ACC = {"quake": 3.0 * np.sin(2 * np.pi * 2.0 * _t) * np.exp(-0.3 * _t),
                 "shake": 2.5 * np.sin(2 * np.pi * 1.2 * _t) * np.exp(-0.2 * _t)}
 SAMPLING_SCALE = {"quake": 1.0, "shake": 1.0}
+
+AT2_TITLE = "Test, 1/1/2000, Somewhere, 90"
+AT2_ROWS = "  1.0E-02  2.0E-02  3.0E-02 -2.0E-02 -1.0E-02\n  0.0E+00  1.0E-02  0.0E+00\n"
+
+
+def at2_rows(values, fmt: str = ".7E", sep: str = "  ") -> str:
+    """`values` as AT2 data lines: five a line, each written with `fmt`, joined by `sep`."""
+    return "\n".join(sep.join(format(v, fmt) for v in values[i:i + 5])
+                     for i in range(0, len(values), 5)) + "\n"
+
+
+def at2_text(rows: str = AT2_ROWS, *, title: str = AT2_TITLE, unit: str = "G", npts=8,
+             dt: str = ".0100", npts_line: str | None = None) -> str:
+    """A PEER NGA AT2 record's text: the database line, `title`, the units line (``UNITS OF
+    unit``), the line ``NPTS=  npts, DT=   dt SEC`` (or `npts_line` whole), then `rows` as
+    they are. The defaults: eight values in g at dt 0.01 s."""
+    line = f"NPTS=  {npts}, DT=   {dt} SEC" if npts_line is None else npts_line
+    return (f"PEER NGA STRONG MOTION DATABASE RECORD\n{title}\n"
+            f"ACCELERATION TIME SERIES IN UNITS OF {unit}\n{line}\n{rows}")

@@ -1,4 +1,4 @@
-"""A study on record files of one's own, beside the study file (`tests/test_study_files.py`,
+"""A study on record files of one's own, beside the study file (`tests/test_study_file.py`,
 `tests/test_cells.py`): three format samples of the shared records folder (`AT2`, `V2A`,
 `PLAIN`, paths inside it) and `OWN_FILES`, a study file that reads them from ``data/``."""
 

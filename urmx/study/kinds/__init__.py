@@ -17,7 +17,7 @@ asks which one it is: it parses nothing, cuts nothing and assembles nothing itse
 ``keys`` : tuple of str
     The keys its ``[study.<table>]`` accepts (its ``parse`` refuses any other);
     `urmx.study.file.file_keys` lists them with every other study-file key, and
-    ``docs/study-files.md`` must describe them (``tests/test_study_files.py``).
+    ``docs/study-files.md`` must describe them (``tests/test_study_file.py``).
 ``combines`` : tuple of str
     Other kinds' tables this kind reads as well (a study with several kind tables is the
     kind that combines all the others; :func:`select`).

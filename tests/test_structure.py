@@ -516,6 +516,50 @@ def test_the_private_name_check_fails_on_a_bad_package(tmp_path):
                                  "pkg/sub/use.py -> pkg.core._cache"}
 
 
+def shadowed(package: Path) -> set[str]:
+    """``pkg.sub`` of every submodule whose package face binds its name to something else
+    (``from .pieces import tables`` beside ``tables.py``): ``import pkg.sub as m`` then
+    gives that thing, not the module."""
+    root = package.parent
+    found = set()
+    for init in package.rglob("__init__.py"):
+        folder = init.parent
+        subs = {p.stem for p in folder.glob("*.py") if p.stem != "__init__"}
+        subs |= {p.name for p in folder.iterdir() if (p / "__init__.py").is_file()}
+        dotted = ".".join(folder.relative_to(root).parts)
+        for node in _parse(init).body:
+            if isinstance(node, ast.ImportFrom) and not (node.level == 1 and not node.module):
+                bound = {a.asname or a.name for a in node.names}
+            elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+                bound = {node.name}
+            elif isinstance(node, ast.Assign):
+                bound = {t.id for t in node.targets if isinstance(t, ast.Name)}
+            else:
+                continue
+            found |= {f"{dotted}.{n}" for n in bound & subs}
+    return found
+
+
+#: submodules their face shadows on purpose: each assessment procedure is called by the
+#: name of its module (``urmx.assess.nzsee_c8(...)``), and ``urmx.records.manifest()`` and
+#: ``measures()`` are the records' public functions (issues before 35)
+SHADOWED = {"urmx.assess.asce41_ht", "urmx.assess.doherty", "urmx.assess.ntc_kinematic",
+            "urmx.assess.nzsee_c8", "urmx.assess.urmx_rule", "urmx.records.manifest",
+            "urmx.records.measures"}
+
+
+def test_no_package_face_shadows_a_new_submodule(tmp_path):
+    assert shadowed(PACKAGE) == SHADOWED
+    pkg = tmp_path / "pkg"
+    (pkg / "kernel").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "kernel" / "__init__.py").write_text(
+        "from . import loop\nfrom .pieces import Tables, tables\ndef checks(): pass\n")
+    for name in ("loop", "pieces", "tables", "checks"):
+        (pkg / "kernel" / f"{name}.py").write_text("")
+    assert shadowed(pkg) == {"pkg.kernel.tables", "pkg.kernel.checks"}
+
+
 def test_library_code_leaves_the_plotting_backend_alone():
     for path in PACKAGE.rglob("*.py"):
         tree = ast.parse(path.read_text(encoding="utf-8"))

@@ -33,7 +33,7 @@ HERE = Path(__file__).resolve().parent
 # every urmx module that defines compiled (numba) functions, and the kernel's other modules
 # (its tables and checks shape every result the compiled loop gives)
 COMPILED_MODULES = ("jitcache.py", "model.py", "kernel/__init__.py", "kernel/checks.py",
-                    "kernel/loop.py", "kernel/tables.py", "native.py")
+                    "kernel/loop.py", "kernel/pieces.py", "native.py")
 
 
 def _version_stamp(package: str) -> bytes:

@@ -38,7 +38,7 @@ time. Its solution is an entire function of time, so:
 
 The package: this face (:func:`run`, :func:`warm_up`, :data:`STATUS`, :data:`LAWS`,
 :func:`scalars`), :mod:`urmx.kernel.loop` (the compiled loop, its helpers and the constants
-that size its arrays), :mod:`urmx.kernel.tables` (the host-side piece tables and their
+that size its arrays), :mod:`urmx.kernel.pieces` (the host-side piece tables and their
 cache) and :mod:`urmx.kernel.checks` (what a wall and a record must satisfy).
 
 The integration loop (:func:`loop._march`) is one compiled function that never allocates
@@ -142,7 +142,7 @@ from .loop import (
     WINDOW,
     piece_key,
 )
-from .tables import NO_HIST, NO_LOG, Tables, clear_cache, tables, theta0
+from .pieces import NO_HIST, NO_LOG, Tables, clear_cache, tables, theta0
 
 __all__ = [
     "DT_RANGE", "EVENT_NAMES", "EVENT_SPAN", "EV_BASE_IMPACT", "EV_BASE_OPEN",

@@ -4,7 +4,7 @@ The constants that size its arrays, the event semantics shared with the scipy re
 (:mod:`urmx.reference`), the Taylor series and root finding, and the integration loop
 :func:`_march` that :mod:`urmx.native` compiles once into a native object. The method is
 described in :mod:`urmx.kernel`; the host-side tables the loop reads are built in
-:mod:`urmx.kernel.tables`.
+:mod:`urmx.kernel.pieces`.
 """
 
 from __future__ import annotations

@@ -1,11 +1,15 @@
 """Kernel: analyses per second per core on the benchmark wall under El Centro x 0.5, warm
 (mode tables cached, as in studies) and cold (`urmx.kernel.clear_cache` before each run),
 the speed ratio to the reference at ``rtol=1e-8`` and the errors of both against the
-converged reference, all in one run; with a profile of the Python layer."""
+converged reference, all in one run; with a profile of the Python layer; and the kernel
+against the one at `kernel_paired.BASELINE_COMMIT` in paired processes on one core, on the
+benchmark analysis and a typical IDA analysis, with the per-sub-step and per-event costs
+against a minimal stepping loop (`benchmarks.kernel_paired`)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +18,7 @@ import numpy as np
 from urmx import Wall
 from urmx.markdown import table
 
+from .. import kernel_paired
 from ..common import (
     PEAKS,
     benchmark_wall,
@@ -30,8 +35,9 @@ TARGET_RATE = 2000.0  # analyses per second per core, benchmark wall
 TARGET_SPEEDUP = 1000.0  # kernel over the reference at rtol=1e-8
 
 
-def run(quick: bool) -> dict:
-    """Warm and cold rates, the reference at rtol 1e-8 and the converged reference."""
+def run(quick: bool, echo: Callable[[str], None] = print) -> dict:
+    """Warm and cold rates, the reference at rtol 1e-8 and the converged reference; the
+    paired measurement against `kernel_paired.BASELINE_COMMIT` (``"paired"``)."""
     from urmx import kernel, reference
 
     wall = benchmark_wall()
@@ -73,6 +79,7 @@ def run(quick: bool) -> dict:
     out["met_error"] = error_verdict(err_k["max"], self_check["max"], err_r["max"],
                                      ref_vs_kernel["max"])
     out["profile"] = profile(wall, ag, dt, n=20 if quick else 200, **kw)
+    out["paired"] = kernel_paired.run(quick, echo)
     return out
 
 
@@ -111,10 +118,21 @@ def profile(wall: Wall, ag: np.ndarray, dt: float, n: int = 100, **kw: Any) -> d
     for (file, _line, func), (_cc, ncalls, tt, ct, _callers) in stats.stats.items():
         if func == "run" and file.endswith(("kernel.py", "kernel/__init__.py")):
             total = ct / n
-        rows.append({"function": f"{Path(file).name}:{func}", "calls": ncalls / n,
+        rows.append({"function": f"{where(file)}:{func}", "calls": ncalls / n,
                      "own_us": 1e6 * tt / n, "cumulative_us": 1e6 * ct / n})
     rows.sort(key=lambda r: -r["own_us"])
     return {"analyses": n, "total_us": 1e6 * total, "top": rows[:8]}
+
+
+def where(file: str) -> str:
+    """A profiled function's file as the report names it: its path in the checkout for
+    the project's own modules (``urmx/kernel/__init__.py``), else its name."""
+    from urmx.config import project_root
+
+    try:
+        return Path(file).resolve().relative_to(project_root().resolve()).as_posix()
+    except ValueError:  # (numpy, builtins: "~")
+        return Path(file).name
 
 
 def _error_word(k: dict) -> str:
@@ -135,7 +153,7 @@ def targets(k: dict) -> list[list[str]]:
          f"{fmt(k['kernel_self_check']['max'])}) vs reference "
          f"{fmt(k['error_reference_1e-8']['max'])} (vs kernel "
          f"{fmt(k['reference_1e-8_vs_kernel']['max'])})", _error_word(k)],
-    ]
+    ] + (kernel_paired.targets(k["paired"]) if "paired" in k else [])
 
 
 def render(k: dict) -> list[str]:
@@ -200,4 +218,6 @@ def render(k: dict) -> list[str]:
                      f"{k['us_per_event'] * k['events'] / 1e3:.2f} ms; the target needs "
                      f"{1e6 / TARGET_RATE / max(k['events'], 1):.2f} us per event.")
             L.append("")
+    if "paired" in k:
+        L += kernel_paired.render(k["paired"])
     return L

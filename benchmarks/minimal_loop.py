@@ -29,7 +29,7 @@ N_EV = 4  # event functions of the sign test
 N_TRACK, N_DISP = 9, 6  # peak trackers: the first N_DISP on y, the rest on accelerations
 
 
-@njit(inline="always", error_model="numpy")
+@njit(inline="always", error_model="numpy", cache=True)
 def _steps(E, PV, ag, dt, RT, KP, TR, MK, MC, MR, MG, out, nn, mode):
     """Step the record (nn coordinates, a constant once inlined); returns the number of
     sub-steps the sign test flagged (kept so that the compiler cannot drop the test)."""
@@ -85,7 +85,7 @@ def _steps(E, PV, ag, dt, RT, KP, TR, MK, MC, MR, MG, out, nn, mode):
     return flagged
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", cache=True)
 def minimal_loop(E, PV, ag, dt, RT, KP, TR, MK, MC, MR, MG, out, n, mode):
     """Step `ag` (scaled samples, step `dt`) with the propagator E, PV of a piece with `n`
     coordinates (2 or 3), `mode` 0, 1 or 2 (module docstring); writes the peaks and the

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import benchmarks
-from benchmarks import common, report
+from benchmarks import common, kernel_paired, report
 from benchmarks.sections import SECTIONS, grid_scaling, kernel, startup, work_precision
 from urmx import guard
 from urmx.cli import main
@@ -335,3 +335,162 @@ def test_startup_block_request_to_a_process_that_has_ended():
     with pytest.raises(RuntimeError, match=r"^the steady-state process of main ended early "
                                            r"\(exit 4\)$"):
         startup._block(proc, "main", 20)
+
+
+# ---- the kernel against 834f656 and its cost table (benchmarks/kernel_paired.py) ----------
+
+def _cost_inputs(a=80e-9, ev=1e-6, tiny=15e-6, events=500, steps=2687):
+    """Made-up timings that obey the cost model exactly: an analysis of S sub-steps costs
+    tiny + checks + S*a + events*ev, its checks 2 us per 1000 samples."""
+    S = {1: 3000, 2: 5700, 3: 8400, 4: 11100}
+    C = {k: 2e-6 * (steps * k + 1) / 1000 for k in S}
+    T = {k: tiny + C[k] + S[k] * a + events * ev for k in S}
+    Z = {1: 1200, 2: 1210, 3: 1220, 4: 1227}
+    minimal = [steps * 10e-9, steps * 15e-9, steps * 40e-9]
+    return dict(T=T, S=S, Z=Z, C=C, events=events, tiny=tiny, minimal=minimal, steps=steps)
+
+
+def test_kernel_costs_recover_the_model():
+    """The cost arithmetic on timings made from known costs gives those costs back: the
+    plain sub-step (slope over the resampled records, checks removed), the event, the
+    Python layer, the minimal loop per step and their ratio."""
+    c = kernel_paired.costs(**_cost_inputs())
+    assert c["substep_ns"] == pytest.approx(80.0, rel=1e-9)
+    assert c["event_us"] == pytest.approx(1.0, rel=1e-9)
+    python = 15e-6 + 2e-6 * 2688 / 1000
+    assert c["python_us"] == pytest.approx(1e6 * python, rel=1e-12)
+    assert c["minimal_ns"] == pytest.approx([10.0, 15.0, 40.0])
+    assert c["ratio_minimal"] == pytest.approx(2.0, rel=1e-9)
+    total = python + 3000 * 80e-9 + 500 * 1e-6
+    assert c["analysis_us"] == pytest.approx(1e6 * total, rel=1e-12)
+    assert c["share_substeps"] == pytest.approx(3000 * 80e-9 / total, rel=1e-9)
+    assert c["share_events"] + c["share_substeps"] + c["share_python"] == pytest.approx(1.0)
+    assert c["series_per_added_substep"] == pytest.approx(27 / 8100)
+    # a slower event and a dearer sub-step show where they belong, not elsewhere
+    d = kernel_paired.costs(**_cost_inputs(a=100e-9, ev=0.5e-6))
+    assert d["substep_ns"] == pytest.approx(100.0, rel=1e-9)
+    assert d["event_us"] == pytest.approx(0.5, rel=1e-9)
+    assert d["ratio_minimal"] == pytest.approx(2.5, rel=1e-9)
+
+
+def test_resample_keeps_the_piecewise_linear_motion():
+    ag = np.array([0.0, 1.0, -2.0, 0.5])
+    fine, dt = kernel_paired.resample(ag, 0.02, 2)
+    assert dt == 0.01 and fine.size == 7
+    assert fine[::2].tolist() == ag.tolist()  # the samples exactly
+    np.testing.assert_allclose(fine[1::2], [0.5, -0.5, -0.75], rtol=1e-15)
+    fine3, dt3 = kernel_paired.resample(ag, 0.02, 3)
+    assert fine3[::3].tolist() == ag.tolist() and dt3 == pytest.approx(0.02 / 3)
+    assert fine3[1] == pytest.approx(1 / 3) and fine3[5] == pytest.approx(-1.0)
+
+
+def test_minimal_loop_steps_the_kernels_propagator():
+    """The minimal loop against the same stepping in numpy: the state after the record,
+    the 9 peaks (accelerations absolute) and the count of sub-steps the sign test flags."""
+    from benchmarks.minimal_loop import inputs, minimal_loop
+
+    w = guard.benchmark_wall()
+    d = inputs(w, 0.02)
+    assert d["n"] == 2 and d["nsub"] == 1
+    ag = 2.0 * np.sin(np.arange(200) * 0.3) * np.exp(-np.arange(200) * 0.01)
+    z, peaks, ed_a, flagged = np.zeros(6), np.zeros(9), np.zeros(4), 0
+    for k in range(199):
+        beta = (ag[k + 1] - ag[k]) / 0.02
+        z = d["E"] @ z + d["PV"][0] + ag[k] * d["PV"][1] + beta * d["PV"][2]
+        r, v = z[:3], z[3:]
+        e, ed = d["RT"].T @ r + d["KP"], d["RT"].T @ v
+        flagged += bool(np.any((e <= 0) | ((ed_a < 0) & (ed > 0))))
+        ed_a = ed
+        acc = -d["MR"] - d["MG"] * ag[k + 1] - d["MK"] @ r - d["MC"] @ v
+        x = np.r_[d["TR"][:6] @ r, d["TR"][6:] @ acc + ag[k + 1]]
+        peaks = np.maximum(peaks, np.abs(x))
+    assert np.abs(z).max() > 1e-6  # the wall moved
+    out = np.zeros(10)
+    args = [d[x] for x in ("E", "PV")], [d[x] for x in ("RT", "KP", "TR", "MK", "MC", "MR",
+                                                      "MG")]
+    for mode in (0, 1, 2):
+        got = minimal_loop(*args[0], ag, 0.02, *args[1], out, 2, mode)
+        assert out[9] == pytest.approx(z[0], rel=1e-12)
+        assert got == (flagged if mode >= 1 else 0)
+    assert flagged > 0
+    np.testing.assert_allclose(out[:9], peaks, rtol=1e-12)
+
+
+def _paired(bench=2.0, ida=1.5, event=0.4, ratio=1.9, same=True) -> dict:
+    """Paired data as kernel_paired.run saves it (one cost dict serves every column)."""
+    c = kernel_paired.costs(**_cost_inputs())
+    now = dict(c, event_us=event, ratio_minimal=ratio)
+    r = {"rounds": bench, "minima": bench * 0.98, "now_ms": 0.5, "base_ms": 1.0,
+         "now_min_ms": 0.45, "base_min_ms": 0.9}
+    return {"baseline_commit": "834f656", "pairs": 2, "rounds": 4, "block_seconds": 0.01,
+            "ratios": {"benchmark": r, "ida": dict(r, rounds=ida, minima=ida)},
+            "costs": {"now": {"benchmark": now, "ida": c},
+                      "834f656": {"benchmark": c, "ida": c}},
+            "same_counts": same, "ida_case": kernel_paired.IDA_CASE,
+            "what": {"benchmark": "benchmark wall", "ida": "s20 on D1"},
+            "samples": {"benchmark": 2688, "ida": 10998},
+            "dt": {"benchmark": 0.02, "ida": 0.0025}}
+
+
+def test_paired_targets_met_and_missed():
+    """1.9x on the benchmark analysis and 1.8x on the IDA analysis: 2.0x meets the first,
+    1.5x misses the second; the aims for an event and for the minimal-loop ratio too."""
+    rows = kernel_paired.targets(_paired())
+    assert [r[2] for r in rows] == ["**met**", "**NOT MET**", "**met**", "**met**"]
+    assert rows[0][1] == "2.00x; 1.96x" and rows[1][1] == "1.50x; 1.50x"
+    assert rows[0][0].startswith(">= 1.9x the kernel at `834f656`, benchmark analysis")
+    bad = kernel_paired.targets(_paired(bench=1.89, ida=1.8, event=0.6, ratio=2.1))
+    assert [r[2] for r in bad] == ["**NOT MET**", "**met**", "**NOT MET**", "**NOT MET**"]
+
+
+def test_paired_render_states_the_method_and_both_commits():
+    text = "\n".join(kernel_paired.render(_paired()))
+    assert "| benchmark analysis, `834f656` | benchmark analysis, now |" in text
+    assert "| plain sub-step [ns] | 80.0 | 80.0 | 80.0 | 80.0 |" in text
+    assert "| **plain sub-step / minimal loop with peaks** | **2.00x** | **1.90x** |" in text
+    assert "| minimal loop: + 9 peaks [ns a step] | 40.0 |" in text
+    assert "**2.00x** (1.96x)" in text and "Method, to repeat it" in text
+    assert "give the same sub-step" in text
+    assert "**different** (a result changed)" in "\n".join(
+        kernel_paired.render(_paired(same=False)))
+    # the kernel section carries the rows into the report's targets table
+    k = _fake_sections()["kernel"]["data"]
+    assert len(kernel.targets(dict(k, paired=_paired()))) == len(kernel.targets(k)) + 4
+
+
+def test_the_ida_case_lies_just_below_collapse(records_dir):
+    """The IDA analysis is the highest surviving scale of the capacity search: the wall
+    survives the whole record (10,998 samples, 474 events) there and collapses at the
+    capacity's scale, 0.08 % higher."""
+    from urmx import kernel as urmx_kernel
+    from urmx.records.record import as_record
+
+    wall = kernel_paired.ida_wall()
+    rec = as_record(kernel_paired.IDA_CASE["record"], records_dir)
+    ag = rec.scaled()
+    res = urmx_kernel.run(wall, ag, rec.dt, scale=kernel_paired.IDA_CASE["scale"], cor=0.8)
+    assert ag.size == 10998 and rec.dt == 0.0025
+    assert res["status"] == "ok" and res["events"] == 474
+    top = urmx_kernel.run(wall, ag, rec.dt, scale=kernel_paired.IDA_CASE["capacity_scale"],
+                          cor=0.8)
+    assert top["status"] == "collapsed"
+
+
+def test_profile_rows_name_the_module_path():
+    from urmx import kernel as urmx_kernel
+
+    assert kernel.where(urmx_kernel.__file__) == "urmx/kernel/__init__.py"
+    assert kernel.where(np.__file__) == "__init__.py"
+
+
+def test_a_kernel_worker_that_dies_is_named(monkeypatch, tmp_path):
+    """A worker that ends before it is ready, or after a request, is named with its exit
+    status."""
+    monkeypatch.setattr(kernel_paired, "_WORKER", "raise SystemExit(4)")
+    with pytest.raises(RuntimeError, match=r"worker of now ended early \(exit 4\)"):
+        kernel_paired._pair({"now": tmp_path}, tmp_path / "x.npz", -1, 1, 0.01, {"now": {}})
+    monkeypatch.setattr(kernel_paired, "_WORKER", 'import sys, json\nprint(json.dumps('
+                        '{"counts": {}, "warm": {"a:k1": 0.001}}), flush=True)\n'
+                        'sys.stdin.readline()\nraise SystemExit(5)')
+    with pytest.raises(RuntimeError, match=r"worker of now ended early \(exit 5\)"):
+        kernel_paired._pair({"now": tmp_path}, tmp_path / "x.npz", -1, 1, 0.01, {"now": {}})

@@ -15,7 +15,8 @@ Where the time goes (:func:`costs`), for each kernel, from medians over the bloc
   (less the record checks) against the sub-step count when the same ground motion is
   resampled at dt/k, k in `FINER` (piecewise linear: the same continuous motion, so the same
   events; the sub-steps added are plain ones, save the few that the finer grid flags for a
-  series, reported beside it);
+  series, reported beside it); a slope per round, from that round's blocks, and their
+  median;
 * the Python layer: a run on the record's first 3 samples plus the record checks
   (`kernel.check_inputs`) on the whole record;
 * the event: what is left of the analysis time after the sub-steps and the Python layer,
@@ -237,15 +238,21 @@ def measure(trees: dict, inputs: Path, quick: bool, echo: Callable[[str], None])
 def costs(T: dict, S: dict, Z: dict, C: dict, events: int, tiny: float,
           minimal: list[float], steps: int) -> dict:
     """Where one kernel's time goes on one analysis (module docstring). T, S, Z, C: by
-    resampling factor k, the time of an analysis [s], its sub-steps, its sub-steps with a
-    series and the time of its record checks [s]; `tiny` a run on 3 samples [s];
-    `minimal` the minimal loop's three variants over the record [s], `steps` its steps."""
+    resampling factor k, the time of an analysis [s] (a number, or one per round), its
+    sub-steps, its sub-steps with a series and the time of its record checks [s] (a
+    number or one per round); `tiny` a run on 3 samples [s]; `minimal` the minimal loop's
+    three variants over the record [s], `steps` its steps. The plain sub-step is the
+    median over rounds of each round's slope (a round's blocks met the same host), the
+    rest from the medians over rounds."""
     ks = sorted(T)
+    T = {k: np.atleast_1d(np.asarray(T[k], float)) for k in ks}
+    C = {k: np.atleast_1d(np.asarray(C[k], float)) for k in ks}
     s = np.array([S[k] for k in ks], float)
-    loop = np.array([T[k] - C[k] for k in ks])
-    substep = float(np.polyfit(s, loop, 1)[0]) if len(ks) > 1 else float("nan")
-    python = tiny + C[ks[0]]
-    total = T[ks[0]]
+    slopes = [np.polyfit(s, [T[k][i] - C[k][i] for k in ks], 1)[0]
+              for i in range(len(T[ks[0]]))] if len(ks) > 1 else [float("nan")]
+    substep = float(np.median(slopes))
+    python = tiny + float(np.median(C[ks[0]]))
+    total = float(np.median(T[ks[0]]))
     event = (total - python - S[ks[0]] * substep) / events if events else float("nan")
     per_step = [m / steps for m in minimal]
     return {
@@ -257,6 +264,7 @@ def costs(T: dict, S: dict, Z: dict, C: dict, events: int, tiny: float,
         "series_per_added_substep": (Z[ks[-1]] - Z[ks[0]]) / (S[ks[-1]] - S[ks[0]])
         if len(ks) > 1 else float("nan"),
         "substeps": S[ks[0]], "series": Z[ks[0]], "events": events,
+        "analysis_k_us": [1e6 * float(np.median(T[k])) for k in ks],
     }
 
 
@@ -281,10 +289,10 @@ def summarise(m: dict, steps: dict) -> dict:
         for tree in (NOW, BASE):
             b, c = bl[tree], cn[tree]
             out["costs"].setdefault(tree, {})[case] = costs(
-                T={k: _median(b[f"{case}:k{k}"]) for k in FINER},
+                T={k: [x["median"] for x in b[f"{case}:k{k}"]] for k in FINER},
                 S={k: c[f"{case}:k{k}"]["substeps"] for k in FINER},
                 Z={k: c[f"{case}:k{k}"]["series"] for k in FINER},
-                C={k: _median(b[f"{case}:check{k}"]) for k in FINER},
+                C={k: [x["median"] for x in b[f"{case}:check{k}"]] for k in FINER},
                 events=c[f"{case}:k1"]["events"], tiny=_median(b[f"{case}:tiny"]),
                 minimal=[_median(b[f"{case}:min{i}"]) for i in range(3)],
                 steps=steps[case])
@@ -416,7 +424,8 @@ METHOD = [
     "(linear interpolation: the same piecewise-linear ground motion, so the same events "
     "and peaks; the added sub-steps are plain but for the few the finer grid flags for a "
     "series, last row), and the slope of the analysis time, less the record checks, "
-    "against the sub-step count (least squares over dt, dt/2, dt/3, dt/4). *Python layer*: "
+    "against the sub-step count (least squares over dt, dt/2, dt/3, dt/4, in each round; "
+    "the median over rounds). *Python layer*: "
     "`kernel.run` on the record's first 3 samples plus `kernel.check_inputs` on the whole "
     "record. *Event*: (analysis - sub-steps x plain sub-step - Python layer) / events: "
     "locating events (the series of flagged sub-steps, root finding) and handling them. "

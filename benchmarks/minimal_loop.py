@@ -16,7 +16,9 @@ This is not urmx code and no analysis uses it: it is a yardstick. Like the kerne
 it is specialised to the number of coordinates (2 or 3: the small loops have constant trip
 counts that the compiler unrolls) and compiled with numba's numpy error model; it keeps
 the state in small arrays as the kernel does. Loaded by the paired kernel benchmark's
-worker processes by file path, so it runs beside either commit's kernel.
+worker processes by file path, so it runs beside either commit's kernel; compiled in each
+process (a few seconds), not cached: numba's cache would be shared between the module's
+names here and in the tests, and a worker cannot import the other name.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ N_EV = 4  # event functions of the sign test
 N_TRACK, N_DISP = 9, 6  # peak trackers: the first N_DISP on y, the rest on accelerations
 
 
-@njit(inline="always", error_model="numpy", cache=True)
+@njit(inline="always", error_model="numpy")
 def _steps(E, PV, ag, dt, RT, KP, TR, MK, MC, MR, MG, out, nn, mode):
     """Step the record (nn coordinates, a constant once inlined); returns the number of
     sub-steps the sign test flagged (kept so that the compiler cannot drop the test)."""
@@ -85,7 +87,7 @@ def _steps(E, PV, ag, dt, RT, KP, TR, MK, MC, MR, MG, out, nn, mode):
     return flagged
 
 
-@njit(error_model="numpy", cache=True)
+@njit(error_model="numpy")
 def minimal_loop(E, PV, ag, dt, RT, KP, TR, MK, MC, MR, MG, out, n, mode):
     """Step `ag` (scaled samples, step `dt`) with the propagator E, PV of a piece with `n`
     coordinates (2 or 3), `mode` 0, 1 or 2 (module docstring); writes the peaks and the

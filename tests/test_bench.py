@@ -371,6 +371,14 @@ def test_kernel_costs_recover_the_model():
     assert d["substep_ns"] == pytest.approx(100.0, rel=1e-9)
     assert d["event_us"] == pytest.approx(0.5, rel=1e-9)
     assert d["ratio_minimal"] == pytest.approx(2.5, rel=1e-9)
+    # per-round timings: the slope is each round's, then their median, so one round that
+    # met a busy host in one block leaves the sub-step cost alone
+    x = _cost_inputs()
+    rounds = {k: [t, t, t * (3.0 if k == 4 else 1.0)] for k, t in x["T"].items()}
+    e = kernel_paired.costs(**dict(x, T=rounds, C={k: [c] * 3 for k, c in x["C"].items()}))
+    assert e["substep_ns"] == pytest.approx(80.0, rel=1e-9)
+    assert e["event_us"] == pytest.approx(1.0, rel=1e-9)
+    assert e["analysis_k_us"][3] == pytest.approx(1e6 * x["T"][4])
 
 
 def test_resample_keeps_the_piecewise_linear_motion():

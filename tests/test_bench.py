@@ -428,10 +428,14 @@ def _paired(bench=2.0, ida=1.5, event=0.4, ratio=1.9, same=True) -> dict:
     """Paired data as kernel_paired.run saves it (one cost dict serves every column)."""
     c = kernel_paired.costs(**_cost_inputs())
     now = dict(c, event_us=event, ratio_minimal=ratio)
-    r = {"rounds": bench, "minima": bench * 0.98, "now_ms": 0.5, "base_ms": 1.0,
-         "now_min_ms": 0.45, "base_min_ms": 0.9}
+    r = {"rounds": bench, "minima": bench * 0.98, "medians": bench * 0.9, "now_ms": 0.5,
+         "base_ms": 1.0, "now_min_ms": 0.45, "base_min_ms": 0.9, "now_median_ms": 0.55,
+         "base_median_ms": 0.99}
     return {"baseline_commit": "834f656", "pairs": 2, "rounds": 4, "block_seconds": 0.01,
-            "ratios": {"benchmark": r, "ida": dict(r, rounds=ida, minima=ida)},
+            "ratios": {"benchmark": r, "ida": dict(r, rounds=ida, minima=ida, medians=ida),
+                       "ida:track": dict(r, rounds=ida * 1.3, minima=ida * 1.3,
+                                         medians=ida * 1.3)},
+            "counts": {"now": {"ida:track": {"events": 474, "mode": "capacity"}}},
             "costs": {"now": {"benchmark": now, "ida": c},
                       "834f656": {"benchmark": c, "ida": c}},
             "same_counts": same, "ida_case": kernel_paired.IDA_CASE,
@@ -444,11 +448,15 @@ def test_paired_targets_met_and_missed():
     """1.9x on the benchmark analysis and 1.8x on the IDA analysis: 2.0x meets the first,
     1.5x misses the second; the aims for an event and for the minimal-loop ratio too."""
     rows = kernel_paired.targets(_paired())
-    assert [r[2] for r in rows] == ["**met**", "**NOT MET**", "**met**", "**met**"]
-    assert rows[0][1] == "2.00x; 1.96x" and rows[1][1] == "1.50x; 1.50x"
+    assert [r[2] for r in rows] == ["**met**", "**NOT MET**", "**met**", "**met**",
+                                    "**met**"]
+    assert rows[0][1] == "2.00x; 1.96x; 1.80x" and rows[1][1] == "1.50x; 1.50x; 1.50x"
+    assert rows[2][0].startswith(">= 1.8x the kernel at `834f656`, IDA analysis as a "
+                                 "capacity search runs it") and rows[2][1] == "1.95x; 1.95x; 1.95x"
     assert rows[0][0].startswith(">= 1.9x the kernel at `834f656`, benchmark analysis")
     bad = kernel_paired.targets(_paired(bench=1.89, ida=1.8, event=0.6, ratio=2.1))
-    assert [r[2] for r in bad] == ["**NOT MET**", "**met**", "**NOT MET**", "**NOT MET**"]
+    assert [r[2] for r in bad] == ["**NOT MET**", "**met**", "**met**", "**NOT MET**",
+                                   "**NOT MET**"]
 
 
 def test_paired_render_states_the_method_and_both_commits():
@@ -457,13 +465,15 @@ def test_paired_render_states_the_method_and_both_commits():
     assert "| plain sub-step [ns] | 80.0 | 80.0 | 80.0 | 80.0 |" in text
     assert "| **plain sub-step / minimal loop with peaks** | **2.00x** | **1.90x** |" in text
     assert "| minimal loop: + 9 peaks [ns a step] | 40.0 |" in text
-    assert "**2.00x** (1.96x)" in text and "Method, to repeat it" in text
+    assert "| 1.000 (0.900; 0.990) | 0.500 (0.450; 0.550) | **2.00x** (1.96x; 1.80x) |" \
+        in text and "Method, to repeat it" in text
     assert "give the same sub-step" in text
     assert "**different** (a result changed)" in "\n".join(
         kernel_paired.render(_paired(same=False)))
     # the kernel section carries the rows into the report's targets table
     k = _fake_sections()["kernel"]["data"]
-    assert len(kernel.targets(dict(k, paired=_paired()))) == len(kernel.targets(k)) + 4
+    assert len(kernel.targets(dict(k, paired=_paired()))) == len(kernel.targets(k)) + 5
+    assert "runs this kernel with `track=\"capacity\"`" in text
 
 
 def test_the_ida_case_lies_just_below_collapse(records_dir):

@@ -72,6 +72,9 @@ EVENT_NAMES = ("base impact", "crack impact", "base opens", "crack opens", "lowe
                "upper branch", "lower collapse", "upper collapse", "base released",
                "crack released", "held branch")
 MAX_EV = 8
+# the event functions a piece of two open joints has (two impacts, two branches of each
+# curve): the hot loops run over KE of them when a piece has no more, else over MAX_EV
+KE = 6
 # status codes (ST_NEED_PIECE is internal: a piece's tables are missing, see run)
 ST_OK, ST_COLLAPSED, ST_EVENT_LIMIT, ST_NEED_PIECE = 0, 1, 2, 3
 STATUS = ("ok", "collapsed", "event-limit")
@@ -669,28 +672,52 @@ def _taylor(MK, MC, MR, MG, r0, v0, a0, beta, h, D, n):
 
 
 @inline
-def _sum_state(D, m, s, h, r, v):
-    """r(s h) and r_d(s h) from the Taylor coefficients."""
+def _sum_state_n(D, m, s, h, r, v, nn):
+    """:func:`_sum_state` over the first nn coordinates (a constant where inlined): the
+    coordinates' Horner chains run side by side (each is latency-bound; the arithmetic of
+    each is unchanged); the padding coordinate is set to zero."""
+    p0, p1, p2 = D[m - 1, 0], D[m - 1, 1], 0.0
+    if nn > 2:
+        p2 = D[m - 1, 2]
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
     if s == 1.0:  # the same sums without the products by 1 (half the latency)
-        for i in range(NP):
-            p = D[m - 1, i]
-            dp = 0.0
-            for k in range(m - 1):  # j = m - 2 - k, unsigned: no negative-index handling
-                j = np.uint64(m - 2 - k)
-                dp = dp + p
-                p = p + D[j, i]
-            r[i] = p
-            v[i] = dp / h
-        return
-    for i in range(NP):
-        p = D[m - 1, i]
-        dp = 0.0
+        for k in range(m - 1):  # j = m - 2 - k, unsigned: no negative-index handling
+            j = np.uint64(m - 2 - k)
+            d0 = d0 + p0
+            p0 = p0 + D[j, 0]
+            d1 = d1 + p1
+            p1 = p1 + D[j, 1]
+            if nn > 2:
+                d2 = d2 + p2
+                p2 = p2 + D[j, 2]
+    else:
         for k in range(m - 1):
             j = np.uint64(m - 2 - k)
-            dp = dp * s + p
-            p = p * s + D[j, i]
-        r[i] = p
-        v[i] = dp / h
+            d0 = d0 * s + p0
+            p0 = p0 * s + D[j, 0]
+            d1 = d1 * s + p1
+            p1 = p1 * s + D[j, 1]
+            if nn > 2:
+                d2 = d2 * s + p2
+                p2 = p2 * s + D[j, 2]
+    r[0] = p0
+    v[0] = d0 / h
+    r[1] = p1
+    v[1] = d1 / h
+    r[2] = p2
+    v[2] = d2 / h
+
+
+@inline
+def _sum_state(D, m, s, h, r, v, n):
+    """r(s h) and r_d(s h) from the Taylor coefficients of n coordinates (specialised to
+    n = 2 like :func:`_taylor`)."""
+    if n == 2:
+        _sum_state_n(D, m, s, h, r, v, 2)
+    else:
+        _sum_state_n(D, m, s, h, r, v, NP)
 
 
 @inline
@@ -1203,10 +1230,10 @@ def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
 
 
 @inline
-def _events_at_n(RT, KP, r, v, e, ed, nn):
+def _events_at_n(RT, KP, r, v, e, ed, nn, kk):
     r0, r1, r2 = r[0], r[1], r[2]
     v0, v1, v2 = v[0], v[1], v[2]
-    for k in range(MAX_EV):
+    for k in range(kk):
         a = RT[0, k] * r0 + RT[1, k] * r1
         b = RT[0, k] * v0 + RT[1, k] * v1
         if nn > 2:
@@ -1217,18 +1244,24 @@ def _events_at_n(RT, KP, r, v, e, ed, nn):
 
 
 @inline
-def _events_at(RT, KP, r, v, e, ed, n):
-    """Values and rates of all MAX_EV event functions at state (r, v)."""
+def _events_at(RT, KP, r, v, e, ed, n, ke):
+    """Values and rates of the first ke (KE or MAX_EV) event functions at state (r, v),
+    on n coordinates (specialised to n = 2 like :func:`_taylor`)."""
     if n == 2:
-        _events_at_n(RT, KP, r, v, e, ed, 2)
+        if ke == KE:
+            _events_at_n(RT, KP, r, v, e, ed, 2, KE)
+        else:
+            _events_at_n(RT, KP, r, v, e, ed, 2, MAX_EV)
+    elif ke == KE:
+        _events_at_n(RT, KP, r, v, e, ed, NP, KE)
     else:
-        _events_at_n(RT, KP, r, v, e, ed, NP)
+        _events_at_n(RT, KP, r, v, e, ed, NP, MAX_EV)
 
 
 @inner
 def _events_now(RT, KP, r, v, e, ed):
     """:func:`_events_at` on the padded loops, for the instants off the hot path."""
-    _events_at_n(RT, KP, r, v, e, ed, NP)
+    _events_at_n(RT, KP, r, v, e, ed, NP, MAX_EV)
 
 
 @inner
@@ -1248,14 +1281,27 @@ def _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, ag, beta, e, ed):
 
 
 @inline
-def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
-    """False when no event function can have an event on the sub-step: none ends at
-    or below zero, no closed contact may open, none dips towards zero."""
+def _may_fire_k(OPN, e_a, ed_a, e_b, ed_b, H, kk):
+    """False when no event function can have an event on the sub-step of length H: none
+    ends at or below zero, no closed contact may open, none dips towards zero (a rate
+    turning upward whose Hermite cubic may come within a quarter of the smaller end
+    value of zero: the test of the event search itself, so that only the sub-steps it
+    would look at closer pass)."""
     flag = False
-    for k in range(MAX_EV):
-        # (a superset: a rate turning upward is flagged whatever the values)
-        flag |= (e_b[k] <= 0.0) | (OPN[k] * e_a[k] > 0.0) | ((ed_a[k] < 0.0) & (ed_b[k] > 0.0))
+    for k in range(kk):
+        ea, eb, eda, edb = e_a[k], e_b[k], ed_a[k], ed_b[k]
+        dip = (eda < 0.0) & (edb > 0.0) & \
+            (min(ea, eb) - (4.0 / 27.0) * H * (edb - eda) < 0.25 * max(ea, eb))
+        flag |= (eb <= 0.0) | (OPN[k] * ea > 0.0) | dip
     return flag
+
+
+@inline
+def _may_fire(OPN, e_a, ed_a, e_b, ed_b, H, ke):
+    """:func:`_may_fire_k` over the first ke (KE or MAX_EV) event functions."""
+    if ke == KE:
+        return _may_fire_k(OPN, e_a, ed_a, e_b, ed_b, H, KE)
+    return _may_fire_k(OPN, e_a, ed_a, e_b, ed_b, H, MAX_EV)
 
 
 @inline
@@ -1379,6 +1425,7 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
         outs[O_NEED] = mid
         return ST_NEED_PIECE
     ne = active_events(P, L, REL[mid], ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
+    ke = KE if ne <= KE else MAX_EV  # event functions the hot loops evaluate
     rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
     MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], \
         prop[mid], pvec[mid]
@@ -1438,15 +1485,15 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                 _propagate(E, PV, r, v, a0, beta, rb, vb, n)
             else:
                 m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                _sum_state(D, m_taylor, 1.0, H, rb, vb)
-            _events_at(RT, KP, rb, vb, e_b, ed_b, n)
+                _sum_state(D, m_taylor, 1.0, H, rb, vb, n)
+            _events_at(RT, KP, rb, vb, e_b, ed_b, n, ke)
             if rel:
                 _events_rel(RVT, AGT, MK, MC, MR, MG, rb, vb, alpha + beta * tb, beta, e_b,
                             ed_b)
             # earliest event on [tau, tb]
             s_ev = 2.0
             k_ev = -1
-            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b) else 0):
+            for k in range(ne if _may_fire(OPN, e_a, ed_a, e_b, ed_b, H, ke) else 0):
                 opening = kind[k] == EV_BASE_OPEN or kind[k] == EV_CRACK_OPEN
                 ea, eb, eda, edb = e_a[k], e_b[k], ed_a[k], ed_b[k]
                 crossing = ea > 0.0 and eb <= 0.0
@@ -1519,7 +1566,7 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                 # an event at tau + s_ev*H: the state there, summed from the series
                 if m_taylor == 0:
                     m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                _sum_state(D, m_taylor, s_ev, H, rb, vb)
+                _sum_state(D, m_taylor, s_ev, H, rb, vb, n)
                 s_end = s_ev
                 t_end = tau + s_ev * H
             a_end = alpha + beta * t_end
@@ -1592,14 +1639,16 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                     break
                 ne = active_events(P, L, REL[mid], ist, g_open, rows, vrows, agc, sig, kap,
                                    kind, tgt)
+                ke = KE if ne <= KE else MAX_EV
                 rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
                 MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], \
                     vecs[mid, 1], prop[mid], pvec[mid]
-                _point_n(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a,
-                         sacc, sjerk, NP, 0, N_TRACK)
+                # (on the piece's coordinates: the padding ones have zero rows)
+                _point_fast(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a,
+                            sacc, sjerk, n, 0, N_TRACK)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
-                _events_at_n(RT, KP, r, v, e_a, ed_a, NP)
+                _events_at(RT, KP, r, v, e_a, ed_a, n, ke)
                 if rel:
                     _events_rel(RVT, AGT, MK, MC, MR, MG, r, v, alpha + beta * tau, beta, e_a,
                                 ed_a)

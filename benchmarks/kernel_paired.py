@@ -458,7 +458,7 @@ def render(p: dict) -> list[str]:
     heads = [f"{LABELS[case]}, {tree}" for case in p["costs"][NOW]
              for tree in (f"`{b}`", "now")]
     L += _table(["", *heads], _cost_rows(p))
-    L += ["", *METHOD, ""]
+    L += ["", *METHOD, "", *WHY, ""]
     return L
 
 
@@ -512,4 +512,33 @@ METHOD = [
     "on y_dd + xg_dd); time per step. The plain sub-step does all of that and the "
     "kernel's test of up to 8 event functions, the trackers' rates and the check of "
     "interior extrema.",
+]
+
+
+WHY = [
+    "**Why the speed targets are missed (issue 41, 2026-11-27).** The kernel's results may "
+    "not change (bit for bit on the regression guard's cases, the pinned archives and the "
+    "capacities), and that fixes most of its arithmetic: every event needs two Taylor "
+    "series (one to locate it on its sub-step, a fresh one from the state after it to the "
+    "sub-step's end), a bracketed Newton search polished to the last ulps (issue 32), and "
+    "the search of the functions left at zero for a first fall (issue 24). Counted on the "
+    "benchmark analysis with an instrumented copy of the loop: 3,279 sub-steps, 592 "
+    "events, 1,215 series (592 after events, the rest locating them), 656 root searches, "
+    "42 first-fall scans of up to 48 polynomial evaluations each. A sampling profile "
+    "(`perf` on the native object linked as a shared library, 8 s of analyses, shared "
+    "machine) put 12 % of the time in the series, 10 % in root finding and polishing, "
+    "2.3 % in the first-fall scans and 64 % in the loop's own body (stepping, the event "
+    "functions, the peaks, the event tables). What this issue changed without changing a "
+    "result: the may-fire test now lets through only the sub-steps the search looks at "
+    "closer (597 instead of 1,108 on the benchmark, one per event plus a few), the hot "
+    "loops evaluate the 6 event functions a piece of two open joints has instead of 8 "
+    "padded ones, the state is summed on the piece's own coordinates, and an IDA runs "
+    "only the drift trackers (`track=\"capacity\"`). Two tries were slower and were "
+    "dropped: the peak test without branches (the IDA analysis's fine steps predict the "
+    "branches well) and exchanging the roles of the start and end arrays instead of "
+    "copying them (0.84x: the compiler no longer keeps them in place). What is left for "
+    "the targets changes results at the round-off level and must then be judged on the "
+    "pinned archives (a chaotic cell moves with any ulp): a cheaper root finder or "
+    "polish, a series reused across an impact, or a register-resident loop for runs of "
+    "plain sub-steps.",
 ]

@@ -47,6 +47,7 @@ dropping it (that would bias the median low).
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -67,6 +68,12 @@ STEP = 1.05  # default ratio of the hunt's geometric grid [1]
 MAX_STRIDE = 3.0  # longest hunt stride (whole grid steps)
 RATIO_TARGET = 0.5  # a stride aims at this instability ratio
 START_FRACTION = 0.5  # default start: this fraction of the wall's static acceleration
+#: the default kernel's tracking mode for a capacity search (only the drift trackers)
+TRACK = "capacity" if "track" in inspect.signature(run_kernel).parameters else None
+MARGIN = 0.05  # a warm start begins this far below its hint (whole grid steps: 1 of 1.05)
+#: a chained study's hint: the previous wall's capacity times the ratio of the walls' static
+#: accelerations to this power (fitted on fema-p695-ida, module docstring)
+HINT_EXPONENT = 0.5
 
 
 @dataclass
@@ -128,8 +135,60 @@ def _positive(name: str, value: Any) -> float:
     return x
 
 
+def _grid_steps(ratio: float, step: float) -> int:
+    """Whole steps of the grid of ratio `step` that span at least `ratio` (>= 1)."""
+    return max(0, int(math.ceil(math.log(ratio) / math.log(step) - 1e-9)))
+
+
+def _hunt_down(analyse, anchor: float, k: int, step: float, stride: int, longest: int,
+               grow: bool):
+    """From a collapse at ``anchor * step**k`` down the grid in strides of `stride` steps
+    (doubled after each collapse when `grow`, up to `longest`) to a survivor: (k of the
+    survivor, the lowest collapse, the survivor's ratio), or (None, the lowest collapse,
+    None) under a millionth of the first."""
+    s0 = hi = anchor * step ** k
+    while True:
+        k -= stride
+        s = anchor * step ** k
+        if s < s0 * 1e-6:  # collapses under a millionth of the start: report it
+            return None, hi, None
+        collapsed, ratio = analyse(s)
+        if not collapsed:
+            return k, hi, ratio
+        hi = s
+        if grow:
+            stride = max(stride, min(2 * stride, longest))
+
+
+def _bisect(analyse, lo: float, hi: float, rtol: float, hint: float | None) -> float:
+    """Bisect (geometrically) to ``hi / lo - 1 <= rtol``; with a `hint` at an end of the
+    bracket, first the point at rtol from it inside (the hint's own transition)."""
+    width = 1.0 + rtol
+    if hint is not None:
+        if abs(hi / hint - 1.0) < 1e-9 and hi / lo > width:
+            probe = hi / width
+            if analyse(probe)[0]:
+                hi = probe
+            else:
+                lo = probe
+        elif abs(lo / hint - 1.0) < 1e-9 and hi / lo > width:
+            probe = lo * width
+            if analyse(probe)[0]:
+                hi = probe
+            else:
+                lo = probe
+    while hi / lo > width * (1.0 + 1e-12):
+        mid = math.sqrt(lo * hi)
+        if analyse(mid)[0]:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
 def search(analyse, s_start: float, s_max: float, step: float, rtol: float,
-           max_stride: float = MAX_STRIDE, target: float = RATIO_TARGET):
+           max_stride: float = MAX_STRIDE, target: float = RATIO_TARGET, *,
+           hint: float | None = None, margin: float = MARGIN):
     """The hunt and bisection on scale factors (module docstring), model-free.
 
     Parameters
@@ -147,33 +206,43 @@ def search(analyse, s_start: float, s_max: float, step: float, rtol: float,
     target : float
         A stride aims at this instability ratio, taking the ratio proportional to the
         intensity. [1]
+    hint : float, optional
+        Warm start (module docstring, "Warm start"): a scale factor near which the wall is
+        expected to collapse (a neighbouring cell's capacity). The hunt then starts
+        `margin` below it (rounded up to whole grid steps; `s_start` is not used), its
+        grid passes through the hint and no stride steps over it. None, NaN or <= 0: the
+        cold start at `s_start`. [1]
+    margin : float
+        Relative distance below the hint where a warm start begins. [1]
 
     Returns
     -------
     (float, bool)
         The capacity as a scale factor (``s_max`` when censored) and the censored flag.
     """
-    s_start = min(s_start, s_max)
+    warm = hint is not None and math.isfinite(hint) and hint > 0
     big = max(1, int(math.floor(math.log(max_stride) / math.log(step) + 1e-9)))
+    # the grid anchor * step**k: through the hint (k = 0 there) when warm
+    anchor, k = (min(hint, s_max), -_grid_steps(1.0 + margin, step)) if warm else (
+        min(s_start, s_max), 0)
+    first = k
     hi = None
-    collapsed, ratio = analyse(s_start)
-    lo, k = s_start, 0
+    s = min(anchor * step ** k, s_max)
+    collapsed, ratio = analyse(s)
+    lo = s
     if collapsed:  # down in whole strides to a survivor, then up again from it
-        hi = s_start
-        while True:
-            k -= big
-            s = s_start * step ** k
-            if s < s_start * 1e-6:  # collapses under a millionth of the start: report it
-                return hi, False
-            collapsed, ratio = analyse(s)
-            if not collapsed:
-                lo = s
-                break
-            hi = s
+        k, hi, ratio = _hunt_down(analyse, anchor, k, step, max(1, -first) if warm else big,
+                                  big, warm)
+        if k is None:
+            return hi, False
+        lo = anchor * step ** k
     while True:  # up: strides of whole grid steps, shorter as the ratio nears the target
         want = min(max_stride, max(step, target / max(ratio, 1e-9)))
-        k += max(1, min(big, int(math.floor(math.log(want) / math.log(step) + 1e-9))))
-        s = s_start * step ** k
+        stride = max(1, min(big, int(math.floor(math.log(want) / math.log(step) + 1e-9))))
+        if warm and k < 0:
+            stride = min(stride, -k)  # never over the hint
+        k += stride
+        s = anchor * step ** k
         if hi is not None and s >= hi * (1.0 - 1e-12):
             break
         if s >= s_max:
@@ -185,20 +254,15 @@ def search(analyse, s_start: float, s_max: float, step: float, rtol: float,
             hi = s
             break
         lo = s
-    while hi / lo - 1.0 > rtol:
-        mid = math.sqrt(lo * hi)
-        if analyse(mid)[0]:
-            hi = mid
-        else:
-            lo = mid
-    return hi, False
+    return _bisect(analyse, lo, hi, rtol, anchor if warm else None), False
 
 
 def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: float = 0.8,
                       rtol: float = RTOL, step: float = STEP,
                       max_intensity: float | None = None, impact: str = "scale",
                       start: float | None = None, records_dir=None,
-                      kernel=None, period_range=None) -> CollapseCapacity:
+                      kernel=None, period_range=None,
+                      hint: float | CollapseCapacity | None = None) -> CollapseCapacity:
     """Collapse capacity of one wall under one record: the smallest intensity at which it
     collapses (hunt, then bisection; first-collapse convention; module docstring).
 
@@ -238,6 +302,12 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
     period_range : (float, float), optional
         Periods of ``im="sa_avg"`` instead of the wall's default range
         (`urmx.fragility.sa_avg_range`). [s]
+    hint : float or CollapseCapacity, optional
+        Warm start (module docstring): an intensity near which the wall is expected to
+        collapse under this record, in the measure `im` for this wall, or the
+        `CollapseCapacity` of a neighbouring wall (or sample) under the same record (its
+        scale factor at collapse is used: right for every measure). The hunt starts
+        `MARGIN` below it instead of at `start`. [units of the measure]
 
     Returns
     -------
@@ -247,9 +317,12 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
     Notes
     -----
     All runs of a cell reuse the kernel's tables of the wall (cached per wall and record
-    step by `urmx.kernel.run`), so only the first analysis of a wall builds them.
+    step by `urmx.kernel.run`), so only the first analysis of a wall builds them. With the
+    default kernel only the drift trackers the search needs are computed
+    (``track="capacity"``: the same capacities, bit for bit).
     """
     check_im(im)
+    track = TRACK if kernel is None else None
     kernel = kernel or run_kernel
     if not isinstance(wall, Wall):
         raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
@@ -270,13 +343,19 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
     max_intensity = _positive("max_intensity", MAX_INTENSITY[im] if max_intensity is None
                               else max_intensity)
     start = None if start is None else _positive("start", start)
+    if isinstance(hint, CollapseCapacity):
+        hint_scale = hint.capacity / hint.record_intensity
+    else:
+        hint_scale = None if hint is None else _positive("hint", hint) / unit
     return cell_capacity(kernel, wall, acc, rec.dt, unit, im, cor, impact, rtol, step,
-                         max_intensity, start, rec.id)
+                         max_intensity, start, rec.id, hint_scale=hint_scale, track=track)
 
 
 def cell_capacity(kernel, wall: Wall, acc: np.ndarray, dt: float, unit: float, im: str,
                   cor: float, impact: str, rtol: float, step: float, max_intensity: float,
-                  start: float | None = None, label: str = "") -> CollapseCapacity:
+                  start: float | None = None, label: str = "", *,
+                  hint_scale: float | None = None, track: str | None = None
+                  ) -> CollapseCapacity:
     """`collapse_capacity` on validated inputs, numpy only: the samples `acc` as analysed
     [m s-2] at step `dt` [s], the record's intensity at scale 1 `unit` [units of the
     measure] (a study's batches call it directly).
@@ -310,6 +389,13 @@ def cell_capacity(kernel, wall: Wall, acc: np.ndarray, dt: float, unit: float, i
         First intensity of the hunt (default as `collapse_capacity`). [units of the measure]
     label : str
         The cell, for messages.
+    hint_scale : float, optional
+        Warm start: the scale factor near which the wall is expected to collapse (a
+        neighbouring cell's capacity over its record intensity); None or NaN: the cold
+        start. [1]
+    track : str, optional
+        The kernel's tracking mode (``"capacity"``: only the drift trackers the search
+        needs); None: the kernel's default (a kernel that does not take it).
     """
     pga = float(np.max(np.abs(acc)))
     if not math.isfinite(pga):
@@ -321,14 +407,16 @@ def cell_capacity(kernel, wall: Wall, acc: np.ndarray, dt: float, unit: float, i
     else:
         s_start = start / unit
     points: dict[float, tuple[float, bool, str]] = {}
+    extra = {} if track is None else {"track": track}
 
     def analyse(s: float) -> tuple[bool, float]:
-        res = kernel(wall, acc, dt, scale=s, cor=cor, impact=impact)
+        res = kernel(wall, acc, dt, scale=s, cor=cor, impact=impact, **extra)
         collapsed = res["status"] == "collapsed"
         points[s] = (res["instability_ratio"], collapsed, res["status"])
         return collapsed, res["instability_ratio"]
 
-    s_cap, censored = search(analyse, s_start, max_intensity / unit, step, rtol)
+    s_cap, censored = search(analyse, s_start, max_intensity / unit, step, rtol,
+                             hint=hint_scale)
     order = sorted(points)
     return CollapseCapacity(
         capacity=max_intensity if censored else s_cap * unit, censored=censored,

@@ -191,9 +191,14 @@ def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> di
                 tail=study.tail, t_rest=study.t_rest, history=[], kernel=kernel,
                 shape=(len(b["wall"]), len(b["diaphragm"]), 1, 1)))
         else:
+            before = None if batch.before is None else {
+                k: (v[..., n:n + 1] if v.ndim else v) for k, v in batch.before.items()}
             per_sample.append(dict(walls=cells, dt=rec.dt, scale_factor=rec.scale_factor,
                                    record=rec.digest, cor=[cor], impact=law,
                                    t_rest=study.t_rest,
+                                   hint=ida.hints(before, lambda iw, j=j: [
+                                       _walls(study, iw, idp, [j])[0]
+                                       for idp in b["diaphragm"]]),
                                    ida=settings.ida.to_dict(), kernel=kernel))
     return {"samples": per_sample, "ida": settings.ida is not None}
 
@@ -465,4 +470,5 @@ KIND_IDA = Kind(name="sampling-ida", table="sampling", combines=("ida",), unit="
                 run=run_batch, assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
                 archived={**ida.ARCHIVED, "unit": "record_intensity"},
                 cell_bytes=ida.cell_bytes, warm_up=ida.KIND.warm_up,
-                dt_above=ida.KIND.dt_above)
+                dt_above=ida.KIND.dt_above, chain=ida.KIND.chain,
+                chain_tag=ida.KIND.chain_tag, chained=ida.KIND.chained)

@@ -970,3 +970,36 @@ def scan() -> None:
 if __name__ == "__main__":
     if sys.argv[1:] == ["scan"]:
         scan()
+
+
+# ---- tracking mode ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("support", list(SUPPORTS))
+def test_capacity_tracking_gives_the_drifts_and_ratios_of_a_full_run_bit_for_bit(support):
+    """track="capacity" follows only the drifts: every output a capacity search reads
+    (ratios, drifts, collapse, its time) and every event count equal those of a full run
+    exactly, at scales from far below to above collapse; the untracked peaks are NaN."""
+    ag, dt = elcentro()
+    wall = SUPPORTS[support]
+    collapsed = set()
+    for scale in (0.3, 0.8, 1.5, 3.0, 6.0):
+        full = kernel.run(wall, ag, dt, scale=scale)
+        cap = kernel.run(wall, ag, dt, scale=scale, track="capacity")
+        for key, value in full.items():
+            if key in kernel.UNTRACKED:
+                assert math.isnan(cap[key]), key
+            elif key == "series":  # (fewer: no acceleration peak asks for a series)
+                assert cap[key] <= value
+            elif isinstance(value, float) and math.isnan(value):
+                assert math.isnan(cap[key]), key
+            else:
+                assert cap[key] == value, (key, scale, cap[key], value)
+        assert full["events"] > 0
+        collapsed.add(full["collapsed"])
+    assert collapsed == {0, 1}  # both sides of collapse were compared
+
+
+def test_an_unknown_tracking_mode_is_refused():
+    ag, dt = elcentro()
+    with pytest.raises(InputError, match="track='drift' is not a tracking mode"):
+        kernel.run(WEST, ag, dt, track="drift")

@@ -78,7 +78,7 @@ class Args:
             raise ValueError(f"kernel arrays {sorted(arrays)} do not match the layout "
                              f"(missing: {missing})")
         n = len(self.layout)
-        self.iv = np.zeros(n * SLOT + 3, np.int64)
+        self.iv = np.zeros(n * SLOT + len(loop.ints), np.int64)
         self.fv = np.zeros(len(loop.reals))
         self.fv[0] = dt
         self._arrays: dict = {}
@@ -124,7 +124,7 @@ class Args:
         iv[at] = _address(record)
         iv[at + 1] = record.shape[0]  # (the caller keeps the record alive during the run)
         n = self._n
-        iv[n], iv[n + 1], iv[n + 2] = ints
+        iv[n:n + len(ints)] = ints
         fv = self.fv
         for i, x in enumerate(reals, 1):
             fv[i] = x

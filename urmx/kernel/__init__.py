@@ -92,10 +92,12 @@ Documented choices (MODEL.md section 4)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..model import P_A1, P_A2, T_REST, Wall
-from .checks import check_inputs, check_t_rest
+from .checks import TRACKS, check_inputs, check_t_rest, check_track
 from .loop import (
     DT_RANGE,
     EV_BASE_IMPACT,
@@ -149,14 +151,21 @@ __all__ = [
     "EV_BASE_RELEASE", "EV_COLLAPSE_LOWER", "EV_COLLAPSE_UPPER", "EV_CRACK_IMPACT",
     "EV_CRACK_OPEN", "EV_CRACK_RELEASE", "EV_HELD_BRANCH", "EV_LOWER", "EV_UPPER", "LAWS",
     "MAX_EVENTS", "MAX_SUBSTEPS", "STATUS", "ST_COLLAPSED", "ST_EVENT_LIMIT",
-    "ST_NEED_PIECE", "ST_OK", "T_REST", "Tables", "WINDOW", "check_inputs", "check_t_rest",
+    "ST_NEED_PIECE", "ST_OK", "TRACKS", "T_REST", "Tables", "UNTRACKED", "WINDOW",
+    "check_inputs", "check_t_rest", "check_track",
     "clear_cache", "history_dict", "run", "scalars", "tables", "warm_up",
 ]
 
 
-def scalars(peaks, outs, status, P):
+#: the peaks a ``track="capacity"`` run does not follow (NaN in its result)
+UNTRACKED = ("peak_crack_displacement", "peak_top_displacement", "peak_base_displacement",
+             "peak_top_acceleration", "peak_crack_acceleration", "peak_base_acceleration")
+
+
+def scalars(peaks, outs, status, P, track="all"):
     """The result dict of one analysis (shared by both solvers): tracker peaks scaled to
-    drifts and instability ratios (a ratio is 1.0 at a collapse of its segment)."""
+    drifts and instability ratios (a ratio is 1.0 at a collapse of its segment); with
+    ``track="capacity"`` the peaks of `UNTRACKED` are NaN."""
     pk = peaks.tolist()  # Python floats in one call (this runs once per analysis)
     out = outs.tolist()
     duration = out[O_DURATION]
@@ -193,13 +202,17 @@ def scalars(peaks, outs, status, P):
         "substeps": int(out[O_SUBSTEPS]),
         "series": int(out[O_SERIES]),
     }
+    if track == "capacity":
+        for key in UNTRACKED:
+            res[key] = math.nan
     return res
 
 
 
 def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: float = 0.8,
         impact: str = "scale", tail: float = 0.0, window: float = WINDOW,
-        t_rest: float = T_REST, history: bool = False, max_log: int = 0) -> dict:
+        t_rest: float = T_REST, history: bool = False, max_log: int = 0, track: str = "all"
+        ) -> dict:
     """One analysis with the exact kernel: the array-level entry point studies call.
 
     Parameters
@@ -230,6 +243,9 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
         Keep the first `max_log` events as ``"event_log"`` rows: time [s], kind (an index
         of ``EVENT_NAMES``), target (a side or branch) and the pattern after the event
         (11, 12, 21 or 22).
+    track : {"all", "capacity"}
+        ``"capacity"`` follows only the drifts (a quarter less work, for capacity searches):
+        the other outputs as ``"all"`` bit for bit but `UNTRACKED` (NaN) and ``series``.
 
     Returns
     -------
@@ -240,6 +256,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
     """
     ag, dt, ntail, law = check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail,
                                       window, t_rest)
+    capacity = check_track(track) == "capacity"
     tab = tables(wall, dt)
     n = tab.nfull
     args = tab.args
@@ -253,14 +270,15 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
             if evlog is not None:
                 args.put("evlog", evlog)
             while True:
-                status = args.run(ag, (ntail, law, int(history)), (cor, window, float(t_rest)))
+                status = args.run(ag, (ntail, law, int(history), int(capacity)),
+                                  (cor, window, float(t_rest)))
                 if status != ST_NEED_PIECE:
                     break
                 # a piece not foreseen as reachable: add it, run again
                 tab.build([piece_key(int(args["outs"][O_NEED]))])
                 if hist is not None:
                     hist[:] = np.nan
-            res = scalars(args["peaks"], args["outs"], status, tab.P)
+            res = scalars(args["peaks"], args["outs"], status, tab.P, track)
         finally:
             if hist is not None:
                 args.put("hist", NO_HIST)

@@ -29,6 +29,18 @@ def check_t_rest(t_rest) -> float:
     return value
 
 
+#: what `urmx.kernel.run` can track: every output, or what a collapse capacity search reads
+TRACKS = ("all", "capacity")
+
+
+def check_track(track) -> str:
+    """`track` if it is one of `TRACKS`, else an InputError naming them."""
+    if track not in TRACKS:
+        raise InputError(f"track={track!r} is not a tracking mode; use one of "
+                         f"{', '.join(map(repr, TRACKS))}")
+    return track
+
+
 def check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail, window=WINDOW,
                  t_rest=T_REST):
     """Validate the arguments shared by every solver; returns (ag, dt, ntail, law)."""

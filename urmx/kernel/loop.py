@@ -105,12 +105,12 @@ ARRAYS = (
 )
 # _march's parameters in order: names of ARRAYS, of the integer arguments (INTS; want_hist
 # a boolean) and of the real ones (REALS), and tuples of array names (passed as tuples)
-INTS = ("ntail", "law", "want_hist")
+INTS = ("ntail", "law", "want_hist", "capacity")
 REALS = ("dt", "cor", "window", "t_rest")
 LOOP_ARGS = ("P", "ag", "dt", "ntail", "cor", "law", "window", "t_rest",
              tuple(x[0] for x in ARRAYS[2:9]), tuple(x[0] for x in ARRAYS[9:16]),
              tuple(x[0] for x in ARRAYS[16:47]), "peaks", "outs", "hist", "want_hist",
-             "evlog")
+             "evlog", "capacity")
 
 # Compiled functions (urmx.jitcache: numba is imported only when one is compiled). The
 # integration loop _march is compiled once into a native object that later processes load
@@ -1082,10 +1082,12 @@ def _hermite_ext(p0, p1, m0, m1):
 # ---- the integrator ---------------------------------------------------------------------
 
 @inline
-def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
-    """:func:`_point` over the first nn coordinates (a constant where inlined). The state,
-    accelerations and jerks are held in locals: the compiler cannot know that the output
-    arrays do not alias the inputs and would reload the inputs after every store."""
+def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn, t_lo, t_hi):
+    """:func:`_point` over the first nn coordinates and the trackers t_lo .. t_hi - 1
+    (constants where inlined: without an acceleration tracker the accelerations are not
+    computed). The state, accelerations and jerks are held in locals: the compiler cannot
+    know that the output arrays do not alias the inputs and would reload the inputs after
+    every store."""
     r0, r1, r2 = r[0], r[1], r[2]
     v0, v1, v2 = v[0], v[1], v[2]
     a0 = -MR[0] - MG[0] * ag - (MK[0, 0] * r0 + MC[0, 0] * v0) - (MK[0, 1] * r1 + MC[0, 1] * v1)
@@ -1104,13 +1106,14 @@ def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
         j1 -= MK[1, 2] * v2 + MC[1, 2] * a2
         j2 = -MG[2] * beta - (MK[2, 0] * v0 + MC[2, 0] * a0) \
             - (MK[2, 1] * v1 + MC[2, 1] * a1) - (MK[2, 2] * v2 + MC[2, 2] * a2)
-    acc[0] = a0
-    acc[1] = a1
-    acc[2] = a2
-    jerk[0] = j0
-    jerk[1] = j1
-    jerk[2] = j2
-    for t in range(N_TRACK):
+    if t_hi > N_DISP:
+        acc[0] = a0
+        acc[1] = a1
+        acc[2] = a2
+        jerk[0] = j0
+        jerk[1] = j1
+        jerk[2] = j2
+    for t in range(t_lo, t_hi):
         p0, p1, p2 = (r0, r1, r2) if t < N_DISP else (a0, a1, a2)
         q0, q1, q2 = (v0, v1, v2) if t < N_DISP else (j0, j1, j2)
         a = TR[t, 0] * p0 + TR[t, 1] * p1
@@ -1127,19 +1130,21 @@ def _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, nn):
 
 
 @inline
-def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n):
-    """Tracker values and rates at one instant (accelerations absolute); acc and jerk
-    are scratch arrays. Specialised to n = 2 like :func:`_taylor`."""
+def _point_fast(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, n, t_lo, t_hi):
+    """Tracker values and rates at one instant (accelerations absolute) of the trackers
+    t_lo .. t_hi - 1; acc and jerk are scratch arrays. Specialised to n = 2 like
+    :func:`_taylor`."""
     if n == 2:
-        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 2)
+        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, 2, t_lo, t_hi)
     else:
-        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
+        _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP, t_lo, t_hi)
 
 
 @inner
 def _point(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk):
-    """:func:`_point_fast` on the padded loops, for the instants off the hot path."""
-    _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP)
+    """:func:`_point_fast` on the padded loops and every tracker, for the instants off the
+    hot path."""
+    _point_n(MK, MC, MR, MG, TR, r, v, ag, beta, val, der, acc, jerk, NP, 0, N_TRACK)
 
 
 @inline
@@ -1255,12 +1260,13 @@ def _may_fire(OPN, e_a, ed_a, e_b, ed_b):
 
 @inline
 def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, MK, MC, MR,
-                MG, r, v, a0, beta, H, n):
-    """Peak update over [0, s_end*H] of a sub-step of length H from the end values and
-    rates; interior extrema that may beat the running peak are located on the exact
-    series about the sub-step start (computed here if m_taylor is 0)."""
+                MG, r, v, a0, beta, H, n, t_lo, t_hi):
+    """Peak update of trackers t_lo .. t_hi - 1 over [0, s_end*H] of a sub-step of length
+    H from the end values and rates; interior extrema that may beat the running peak are
+    located on the exact series about the sub-step start (computed here if m_taylor is
+    0). Each tracker's peak is found by the same operations whichever others are tracked."""
     Hs = s_end * H
-    for t in range(N_TRACK):
+    for t in range(t_lo, t_hi):
         vb = abs(val_b[t])
         if vb > peaks[t]:
             peaks[t] = vb
@@ -1306,14 +1312,17 @@ def record_row(hist, k, L, N, ist, r, v, val, nfull):
 
 @inner
 def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks, outs, hist,
-           want_hist, evlog):
+           want_hist, evlog, capacity):
     """Integrate one analysis. ag: scaled ground acceleration [m/s2] (N samples).
 
     geo: the held states' watch rows, coordinate maps, inverse masses, rotation masks,
     sizes and tracker rows (:func:`geometry`); pieces: the piece tables (:class:`Tables`);
     work: scratch arrays. Fills peaks (N_TRACK), outs (N_OUT) and, when want_hist,
     hist[k, :] at every grid point k (theta1, theta2, u_b, u_c, u_t, a_b, a_c, a_t,
-    pattern, then r, r_d). Returns a status code; ST_NEED_PIECE (with the piece in
+    pattern, then r, r_d). With `capacity` only the drift trackers (TR_D1F1, TR_D1F2,
+    TR_D2: what a collapse capacity search reads) are followed through the sub-steps, by the
+    same operations, so their peaks are those of a full run bit for bit; the other peaks
+    are then meaningless. Returns a status code; ST_NEED_PIECE (with the piece in
     outs[O_NEED]) when a piece's tables are missing (the caller builds them, runs again).
 
     Compiled without numba's reference counting (``_nrt=False``): it never allocates. It has
@@ -1401,8 +1410,9 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
         # so do the rates of release functions (their ground term)
         if step > 0:
             dbeta = beta - beta_prev
-            for t in range(N_DISP, N_TRACK):
-                der_a[t] += dbeta * (1.0 - _rowdot(TR, t, MG))
+            if not capacity:
+                for t in range(N_DISP, N_TRACK):
+                    der_a[t] += dbeta * (1.0 - _rowdot(TR, t, MG))
             if rel:
                 for k in range(MAX_EV):
                     ed_a[k] += AGT[k] * dbeta
@@ -1512,12 +1522,23 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                 _sum_state(D, m_taylor, s_ev, H, rb, vb)
                 s_end = s_ev
                 t_end = tau + s_ev * H
-            _point_fast(MK, MC, MR, MG, TR, rb, vb, alpha + beta * t_end, beta, val_b, der_b,
-                        sacc, sjerk, n)
+            a_end = alpha + beta * t_end
+            if capacity:  # (two copies, each with constant tracker bounds)
+                _point_fast(MK, MC, MR, MG, TR, rb, vb, a_end, beta, val_b, der_b, sacc,
+                            sjerk, n, TR_D1F1, TR_D2 + 1)
+            else:
+                _point_fast(MK, MC, MR, MG, TR, rb, vb, a_end, beta, val_b, der_b, sacc,
+                            sjerk, n, 0, N_TRACK)
             if s_end > 0.0:
                 # peaks over [tau, t_end], the one-sided values before an event included
-                m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor,
-                                       D, cf, MK, MC, MR, MG, r, v, a0, beta, H, n)
+                if capacity:
+                    m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end,
+                                           m_taylor, D, cf, MK, MC, MR, MG, r, v, a0, beta, H,
+                                           n, TR_D1F1, TR_D2 + 1)
+                else:
+                    m_taylor = _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end,
+                                           m_taylor, D, cf, MK, MC, MR, MG, r, v, a0, beta, H,
+                                           n, 0, N_TRACK)
             if m_taylor:
                 n_series += 1
             if ist[I_FAM] == 1:
@@ -1575,7 +1596,7 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                 MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], \
                     vecs[mid, 1], prop[mid], pvec[mid]
                 _point_n(MK, MC, MR, MG, TR, r, v, alpha + beta * tau, beta, val_a, der_a,
-                         sacc, sjerk, NP)
+                         sacc, sjerk, NP, 0, N_TRACK)
                 for t in range(N_TRACK):  # the one-sided values after the event
                     peaks[t] = max(peaks[t], abs(val_a[t]))
                 _events_at_n(RT, KP, r, v, e_a, ed_a, NP)

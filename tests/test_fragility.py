@@ -979,3 +979,32 @@ def test_a_study_extended_by_a_wall_reuses_the_chain_before_it(ida_records, make
     run = engine.last_run()
     assert (run.from_archive, run.computed) == (8, 16)
     assert _capacities(ds) == fresh
+
+
+def test_capacities_are_the_same_bit_for_bit_with_the_capacity_tracking(library):
+    """`collapse_capacity` and the IDA kind run the kernel with ``track="capacity"`` (only
+    the drift trackers): on real cells of the FEMA P695 study, cold and warm-started, the
+    capacities, IDA points and ratios equal those of full runs (``track="all"``) bit for
+    bit."""
+    import functools
+
+    from urmx.kernel import run
+
+    s = load_study("fema-p695-ida")
+    full = functools.partial(run, track="all")
+    for rid, (wid, did) in (("p695-12-clwln", ("s20", "D1")), ("p695-01-mul009", ("s08", "D3")),
+                            ("p695-18-rio270", ("s16", "D2/both"))):
+        spec = next(w for w in s.walls if w.id == wid)
+        w = s.wall(spec, next(d for d in s.diaphragms if d.id == did))
+        rec = F.as_record(rid, library)
+        fast = F.collapse_capacity(w, rec)
+        slow = F.collapse_capacity(w, rec, kernel=full)
+        warm = F.collapse_capacity(w, rec, hint=fast.capacity * 1.03)
+        warm_slow = F.collapse_capacity(w, rec, kernel=full, hint=fast.capacity * 1.03)
+        for a, b in ((fast, slow), (warm, warm_slow)):
+            assert a.capacity == b.capacity and a.analyses == b.analyses
+            assert a.intensity.tobytes() == b.intensity.tobytes()
+            assert a.instability_ratio.tobytes() == b.instability_ratio.tobytes()
+        assert warm.analyses < fast.analyses
+        assert fast.capacity / 1.001 <= warm.capacity <= fast.capacity * 1.001 or \
+            warm.capacity < fast.capacity  # the same transition, or an earlier collapse

@@ -47,7 +47,6 @@ dropping it (that would bias the median low).
 
 from __future__ import annotations
 
-import inspect
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -69,7 +68,7 @@ MAX_STRIDE = 3.0  # longest hunt stride (whole grid steps)
 RATIO_TARGET = 0.5  # a stride aims at this instability ratio
 START_FRACTION = 0.5  # default start: this fraction of the wall's static acceleration
 #: the default kernel's tracking mode for a capacity search (only the drift trackers)
-TRACK = "capacity" if "track" in inspect.signature(run_kernel).parameters else None
+TRACK = "capacity"
 MARGIN = 0.05  # a warm start begins this far below its hint (whole grid steps: 1 of 1.05)
 #: a chained study's hint: the previous wall's capacity times the ratio of the walls' static
 #: accelerations to this power (fitted on fema-p695-ida, module docstring)

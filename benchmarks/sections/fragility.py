@@ -10,11 +10,18 @@ Measures what the fragility workflow promises:
 - how the capacities compare with a brute-force scan on a 1 % grid of scale factors for
   sampled (wall, diaphragm) pairs over all 40 records: the share of cells where the scan
   finds a collapse below the capacity (a collapse window the search stepped over), how far
-  below, and what that does to the fitted median and dispersion.
+  below, and what that does to the fitted median and dispersion; for the cold search
+  (``collapse_capacity`` with no hint, the search before issue 41) and for the study's
+  warm-started chain (each pair's wall computed as the study computes it, after the walls
+  before it on its diaphragm), with each one's analyses per capacity on those cells;
+- `urmx ida` of the study on 2 local worker processes, end to end in fresh processes,
+  against the code of `BASELINE_COMMIT` exported beside this tree, alternating (issue 41:
+  the ratio and each side's analyses per capacity in one run).
 
 Not part of ``all`` (it runs the study three times and the scan: about 5 minutes on 2
-cores); ask for it by name: ``urmx bench fragility`` (``--quick``: a 36-cell study and
-2 x 4 scanned cells, to check the machinery). The numbers depend on the machine and on its
+cores, and the end-to-end runs of both trees); ask for it by name: ``urmx bench
+fragility`` (``--quick``: a 36-cell study, 2 x 4 scanned cells and a 72-cell end-to-end
+study, to check the machinery). The numbers depend on the machine and on its
 load (the 2 cores may be shared): the section carries the load average seen before and
 after each timing.
 """
@@ -96,6 +103,7 @@ def time_study(study, records_dir=None) -> dict:
             t = time.perf_counter()
             ds = run_study(study, out=Path(tmp) / "a.nc", scheduler=client, progress=False,
                            records_dir=records_dir)
+            ds = ds.load()  # (the archive is opened lazily, and removed with `tmp`)
             out["cluster_seconds"] = time.perf_counter() - t
             out["cluster_load"] = [load0, _load()]
         finally:
@@ -446,10 +454,12 @@ def render(data: dict) -> list[str]:
              f"{s['serial_seconds']:.1f} s ({s['serial_seconds'] / s['cluster_seconds']:.2f}x "
              f"the 2-worker time); load {s['serial_load'][0]} -> {s['serial_load'][1]}", ""]]),
         "",
-        "Analyses per capacity: start at half the wall's static acceleration, hunt up in "
+        "Analyses per capacity: the first wall of each chain starts at half the wall's "
+        "static acceleration, the others one grid step below the capacity of the wall "
+        "before them (warm start, `urmx.fragility.capacity`); hunt up in "
         f"strides (up to a factor 3) and then grid steps of {s['step']:g} to the first "
         f"collapse, bisect the last step to rtol {s['rtol']:g} (6 analyses for a step of "
-        "1.05). Histogram (analyses: cells): "
+        "1.05; 1 when the wall collapses where the hint says). Histogram (analyses: cells): "
         + ", ".join(f"{k}: {v}" for k, v in s["analyses_histogram"].items()) + ".",
         "",
         "### Capacities against a brute-force scan",

@@ -39,6 +39,39 @@ same cost (``urmx bench fragility``; most windows are too narrow for any search 
 analyses).
 An analysis the kernel stops at its event bound counts as a survival.
 
+Warm start
+----------
+A study knows more than half a wall's static acceleration: the capacity of the same
+record on the wall before it. `search` takes a ``hint`` (a scale factor near which the
+wall is expected to collapse): the grid ``hint * step**k`` then passes through the hint,
+the hunt starts ``MARGIN`` below it (0.05, rounded up to whole grid steps: one step of
+1.05), no stride steps over the hint, and a start that collapses goes down the grid in
+strides of 1, 2, 4 ... steps (at most the factor 3) to a survivor, then up again as
+above. When the bracket ends at the hint, the bisection first analyses ``rtol`` inside
+it: a wall that collapses where its neighbour did is done in 3 analyses (one step below,
+the hint, rtol below), with the hint as its capacity. The hunt walks the same 1.05 grid
+near collapse as the cold start, so the first-collapse convention and its limit (windows
+narrower than a step can be stepped over) are unchanged; what the warm start skips is the
+range far below the hint, where the cold hunt strides anyway.
+
+The IDA and sampling-IDA study kinds (`urmx.study.kinds.ida`) chain their cells along the
+``wall`` dimension: per (diaphragm, record, cor [, sample]), the first wall the study
+pairs with the record starts cold, and each next paired wall, in the study's order,
+starts from the capacity of the one before it as a scale factor (its capacity over its
+record intensity) times ``(A / A_before) ** HINT_EXPONENT``, A the walls' static
+accelerations (`static_acceleration`): on the cold capacities of ``fema-p695-ida`` the
+ratio of neighbouring walls' capacities has median 0.88 (IQR 0.82-0.94); scaled with the
+exponent 0.5 its median is 0.97 (IQR 0.93-1.03), with 0.7 1.01 but a wider spread; 0.5
+gave the fewest analyses in a replay of the search on those capacities (9.6 a warm cell
+against 10.0 unscaled, margin 0.05; 10.0 with the margin 0.1). The hint, and so the
+result, depends on the whole chain before a cell: a cell's key folds the keys of the
+cells before it (`urmx.study.cells`), batches never split a chain, and a finished
+predecessor's result travels with its successor's batch (`urmx.study.batches`), so a
+cell's result is the same whatever the workers, the batches, a resume or a reuse from an
+earlier archive. Measured on ``fema-p695-ida`` (``urmx bench fragility``, reports/
+performance.md): ANALYSES_NEW analyses a capacity against ANALYSES_OLD cold, and against
+the 1 % scan BIAS_NEW.
+
 Censoring. When the wall survives ``max_intensity`` the cell is *censored*: its capacity
 is only known to exceed ``max_intensity``; the result carries ``capacity = max_intensity``
 with ``censored = True``, and the fits use it as a right-censored observation, never

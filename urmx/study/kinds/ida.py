@@ -11,6 +11,14 @@ the study's pairs leave out is missing in every output: NaN, with ``censored``,
 ``analyses`` and ``event_limits`` float64 in the Dataset and int32 with the ``_FillValue``
 on disk.
 
+The cells form chains along ``wall`` (``Kind.chain``): per (diaphragm, record, cor), each
+wall's search starts from the capacity of the wall before it that the study pairs with the
+record (:func:`warm_hint`; `urmx.fragility.capacity`, "Warm start"), the first one cold. A
+batch computes its walls in order; the cut never splits a chain and a chain's finished
+predecessor travels with the batch (:func:`hints`); the cells' keys fold the chain before
+them (`urmx.study.cells`). The kernel runs with ``track="capacity"`` (the default kernel
+only: another integrator is called as given).
+
 The capacities are scale factors times the record's intensity, so one run holds the
 capacities in every measure: the archive keeps the scale factor at collapse
 (``collapse_scale``) and each record's intensity at scale 1 in every measure

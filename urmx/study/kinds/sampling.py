@@ -29,7 +29,10 @@ grid's peak outputs and ``status`` per cell; collapse capacities give the IDA ki
 outputs, ``median_collapse_intensity`` and ``dispersion`` per (wall, diaphragm, sample) over
 the records, and per (wall, diaphragm) the fit over records and samples together
 (``total_median_collapse_intensity``, ``total_dispersion``) with its parts
-(``record_dispersion``, ``model_dispersion``; `urmx.uncertainty.spread`).
+(``record_dispersion``, ``model_dispersion``; `urmx.uncertainty.spread`). With
+``[study.ida]`` the cells form the IDA kind's chains along ``wall`` (per diaphragm, record
+and sample: each wall's search starts from the capacity of the wall before it,
+`urmx.study.kinds.ida`); a study of one wall runs every cell cold.
 """
 
 from __future__ import annotations

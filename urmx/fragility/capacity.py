@@ -218,6 +218,18 @@ def _bisect(analyse, lo: float, hi: float, rtol: float, hint: float | None) -> f
     return hi
 
 
+def _search_settings(rtol: Any, step: Any) -> tuple[float, float]:
+    """`rtol` in (0, 1) and `step` above 1, as floats (else an `InputError`)."""
+    rtol = _positive("rtol", rtol)
+    if rtol >= 1.0:
+        raise InputError(f"rtol={rtol!r} must be below 1 (relative width of the bracket)")
+    step = _positive("step", step)
+    if step <= 1.0:
+        raise InputError(f"step={step!r} must be greater than 1 (the ratio of the hunt's "
+                         "geometric grid)")
+    return rtol, step
+
+
 def search(analyse, s_start: float, s_max: float, step: float, rtol: float,
            max_stride: float = MAX_STRIDE, target: float = RATIO_TARGET, *,
            hint: float | None = None, margin: float = MARGIN):
@@ -335,11 +347,9 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
         Periods of ``im="sa_avg"`` instead of the wall's default range
         (`urmx.fragility.sa_avg_range`). [s]
     hint : float or CollapseCapacity, optional
-        Warm start (module docstring): an intensity near which the wall is expected to
-        collapse under this record, in the measure `im` for this wall, or the
-        `CollapseCapacity` of a neighbouring wall (or sample) under the same record (its
-        scale factor at collapse is used: right for every measure). The hunt starts
-        `MARGIN` below it instead of at `start`. [units of the measure]
+        Warm start (module docstring): where the wall is expected to collapse, in `im`
+        for this wall, or a neighbour's `CollapseCapacity` under the same record (its
+        scale factor is used). The hunt starts `MARGIN` below it. [units of the measure]
 
     Returns
     -------
@@ -349,22 +359,14 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
     Notes
     -----
     All runs of a cell reuse the kernel's tables of the wall (cached per wall and record
-    step by `urmx.kernel.run`), so only the first analysis of a wall builds them. With the
-    default kernel only the drift trackers the search needs are computed
-    (``track="capacity"``: the same capacities, bit for bit).
+    step by `urmx.kernel.run`); the default kernel runs with ``track="capacity"``.
     """
     check_im(im)
     track = TRACK if kernel is None else None
     kernel = kernel or run_kernel
     if not isinstance(wall, Wall):
         raise InputError(f"wall must be a urmx.Wall, not {type(wall).__name__}")
-    rtol = _positive("rtol", rtol)
-    if rtol >= 1.0:
-        raise InputError(f"rtol={rtol!r} must be below 1 (relative width of the bracket)")
-    step = _positive("step", step)
-    if step <= 1.0:
-        raise InputError(f"step={step!r} must be greater than 1 (the ratio of the hunt's "
-                         "geometric grid)")
+    rtol, step = _search_settings(rtol, step)
     rec = as_record(record, records_dir)
     acc = check_finite(rec.scaled(), f"record {rec.id!r}", rec.dt)
     if not np.any(acc):
@@ -375,10 +377,8 @@ def collapse_capacity(wall: Wall, record: Any, *, im: str = DEFAULT_IM, cor: flo
     max_intensity = _positive("max_intensity", MAX_INTENSITY[im] if max_intensity is None
                               else max_intensity)
     start = None if start is None else _positive("start", start)
-    if isinstance(hint, CollapseCapacity):
-        hint_scale = hint.capacity / hint.record_intensity
-    else:
-        hint_scale = None if hint is None else _positive("hint", hint) / unit
+    hint_scale = hint.capacity / hint.record_intensity if isinstance(
+        hint, CollapseCapacity) else None if hint is None else _positive("hint", hint) / unit
     return cell_capacity(kernel, wall, acc, rec.dt, unit, im, cor, impact, rtol, step,
                          max_intensity, start, rec.id, hint_scale=hint_scale, track=track)
 

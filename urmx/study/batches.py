@@ -11,8 +11,8 @@ Only the cells still to run are cut: a block holding finished cells (found per c
 `urmx.study.cells`) is halved along its longest side until every block is all to run, so
 a resumed run computes no finished cell whatever the batches of the run before were.
 
-A kind whose cells form chains (``Kind.chain``, a dimension: the IDA kinds' ``wall``, each
-cell's search starting from its predecessor's capacity, `urmx.fragility.capacity`) is cut
+A kind whose cells form chains (``Kind.chain``, a dimension along which each cell's result
+depends on the cell before it, as a warm-started search's does) is cut
 without splitting a chain: the chain's dimension is taken whole in every block (the
 others cut to about ``batch_size`` cells), and a block holding finished cells is halved
 along its other dimensions first and then cut along the chain only at finished cells, so

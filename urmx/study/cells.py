@@ -16,9 +16,9 @@ hash of everything that decides its result:
   the kernel's name, `urmx.jitcache.SOURCE_HASH` and the urmx version;
 - whether the kind keeps extra arrays for the cell (``Kind.extras``: a grid's kept time
   histories), so that a cell computed without them is not taken for one with them;
-- for a kind whose cells form chains (``Kind.chain``: the IDA kinds, where a cell's
-  collapse search starts from the capacity of the cell before it on the ``wall``
-  dimension, the previous wall the study pairs with the record; `urmx.fragility.capacity`),
+- for a kind whose cells form chains (``Kind.chain``: a dimension along which each cell
+  starts from the result of the cell before it, e.g. a search warm-started from the
+  previous wall the study pairs with the record; `urmx.study.kinds.Kind`),
   the keys of every cell before it in its chain: the key of a chain's first cell is its
   own, the next one's folds its own into the key before it (salted with what the kind
   says the chain means, ``Kind.chain_tag``: the search's warm-start margin). A cell is

@@ -67,7 +67,7 @@ MISSING = "NaN where the study's pairs leave the cell out (not run)"
 DIMS = ("wall", "diaphragm", "record", "cor")  # the cells: no added dimension
 #: what the chain of warm starts means (in the chained cells' keys, `urmx.study.cells`)
 CHAIN_TAG = {"warm_start": "previous paired wall", "margin": fragility.MARGIN,
-             "exponent": fragility.HINT_EXPONENT}
+             "exponent": fragility.HINT_EXPONENT, "grid": "(1 + rtol) ** 2 ** j"}
 
 
 @dataclass(frozen=True)

@@ -393,8 +393,9 @@ def _new_lines(data: dict) -> list[str]:
     n = b["new"]
     lines = [
         "Warm-started search (`urmx.fragility.capacity`, the study's chain: each wall "
-        "starts from the capacity of the wall before it on the same diaphragm and record, "
-        "scaled by their static accelerations, one grid step below) on the same cells, "
+        "starts 10 % below the capacity of the wall before it on the same diaphragm and "
+        "record, scaled by their static accelerations, on a grid of 1.001**32) on the "
+        "same cells, "
         "the capacity of each pair's wall as the study computes it (the chain over the "
         "walls before it):",
         "",
@@ -455,11 +456,12 @@ def render(data: dict) -> list[str]:
              f"the 2-worker time); load {s['serial_load'][0]} -> {s['serial_load'][1]}", ""]]),
         "",
         "Analyses per capacity: the first wall of each chain starts at half the wall's "
-        "static acceleration, the others one grid step below the capacity of the wall "
-        "before them (warm start, `urmx.fragility.capacity`); hunt up in "
+        "static acceleration, the others 10 % below the capacity of the wall before them "
+        "(warm start on a grid of 1.001**32, `urmx.fragility.capacity`); hunt up in "
         f"strides (up to a factor 3) and then grid steps of {s['step']:g} to the first "
         f"collapse, bisect the last step to rtol {s['rtol']:g} (6 analyses for a step of "
-        "1.05; 1 when the wall collapses where the hint says). Histogram (analyses: cells): "
+        "1.05, 5 for the warm grid, 1 when the wall collapses where the hint says). "
+        "Histogram (analyses: cells): "
         + ", ".join(f"{k}: {v}" for k, v in s["analyses_histogram"].items()) + ".",
         "",
         "### Capacities against a brute-force scan",

@@ -426,6 +426,20 @@ def _new_lines(data: dict) -> list[str]:
     return lines
 
 
+def _search_text(s: dict, warm: bool) -> str:
+    """How the study's search runs: warm-started (issue 41) or, for a report measured
+    before it, cold."""
+    grid = (f"hunt up in strides (up to a factor 3) and then grid steps of {s['step']:g} "
+            f"to the first collapse, bisect the last step to rtol {s['rtol']:g} (6 analyses "
+            "for a step of 1.05")
+    if not warm:
+        return f"Analyses per capacity: start at half the wall's static acceleration, {grid})."
+    return ("Analyses per capacity: the first wall of each chain starts at half the wall's "
+            "static acceleration, the others 10 % below the capacity of the wall before "
+            "them (warm start on a grid of 1.001**32, `urmx.fragility.capacity`); "
+            f"{grid}, 5 for the warm grid, 1 when the wall collapses where the hint says).")
+
+
 def render(data: dict) -> list[str]:
     """Markdown lines of the section, from the saved dict alone."""
     s, b = data["study"], data["brute_force"]
@@ -455,13 +469,7 @@ def render(data: dict) -> list[str]:
              f"{s['serial_seconds']:.1f} s ({s['serial_seconds'] / s['cluster_seconds']:.2f}x "
              f"the 2-worker time); load {s['serial_load'][0]} -> {s['serial_load'][1]}", ""]]),
         "",
-        "Analyses per capacity: the first wall of each chain starts at half the wall's "
-        "static acceleration, the others 10 % below the capacity of the wall before them "
-        "(warm start on a grid of 1.001**32, `urmx.fragility.capacity`); hunt up in "
-        f"strides (up to a factor 3) and then grid steps of {s['step']:g} to the first "
-        f"collapse, bisect the last step to rtol {s['rtol']:g} (6 analyses for a step of "
-        "1.05, 5 for the warm grid, 1 when the wall collapses where the hint says). "
-        "Histogram (analyses: cells): "
+        _search_text(s, "new" in b) + " Histogram (analyses: cells): "
         + ", ".join(f"{k}: {v}" for k, v in s["analyses_histogram"].items()) + ".",
         "",
         "### Capacities against a brute-force scan",

@@ -634,6 +634,62 @@ def test_the_cut_runs_the_records_of_one_time_step_together():
     assert len(order) == 8 and all(order.count(r) == 2 for r in range(4))
 
 
+@pytest.mark.parametrize("seed", range(5))
+def test_a_chained_cut_keeps_every_chain_together(seed):
+    """The IDA kinds' cells form chains along ``wall`` (warm starts): whatever the batch
+    size and the finished cells, every cell to run is cut once, each block holds whole runs
+    of cells to run along the chain (a block's first wall is the chain's first paired wall
+    or follows a finished one), and the walls a record is not paired with are skipped."""
+    rng = np.random.default_rng(seed)
+
+    class Stand:  # what Cut reads of urmx.study.cells.Cells
+        names, shape, record_axis, chain = ["wall", "diaphragm", "record", "cor"], \
+            (7, 3, 2, 2), 2, 0
+        record_dt = [0.01, 0.01]
+        pairs = rng.random((7, 2)) < 0.8
+
+        def runnable(self):
+            return self.pairs
+
+        def flat(self, block):
+            return np.ravel_multi_index(np.ix_(*block), self.shape)
+
+    cells = Stand()
+    done = rng.random(int(np.prod(cells.shape))) < [0.0, 0.2, 0.5, 0.8, 0.3][seed]
+    seen = np.zeros(done.size, dtype=int)
+    for batch in Cut(cells, int(rng.integers(1, 40)), done):
+        b = batch.block
+        seen[cells.flat(list(b.values())).ravel()] += 1
+        paired = list(np.flatnonzero(cells.pairs[:, batch.record]))
+        at = paired.index(b["wall"][0])
+        assert b["wall"] == paired[at:at + len(b["wall"])]  # consecutive paired walls
+        if at:  # the wall before the block is finished, in every chain of the block
+            before = [[paired[at - 1]], *list(b.values())[1:]]
+            assert done[cells.flat(before).ravel()].all()
+        after = paired[at + len(b["wall"]):at + len(b["wall"]) + 1]
+        if after:  # the block ends its runs: the next paired wall is finished
+            assert done[cells.flat([after, *list(b.values())[1:]]).ravel()].all()
+    runs = np.broadcast_to(cells.pairs[:, None, :, None], cells.shape).ravel()
+    np.testing.assert_array_equal(seen, (runs & ~done).astype(int))
+
+
+def test_chained_keys_fold_the_walls_before(make_study):
+    """An IDA cell's key holds the keys of the walls before it on its chain: a changed
+    wall changes its own key and those after it, not those before."""
+    from .helpers.ida_study import ACC as IDA_ACC
+    from .helpers.ida_study import IDA_STUDY
+
+    recs = {k: urmx.records.Record(k, v, 0.01) for k, v in IDA_ACC.items()}
+    three = IDA_STUDY.replace('walls = ["s08", "s18"]', 'walls = ["s08", "s12", "s18"]')
+    keys = [Cells(load_study(make_study(text, f"{i}.toml")), kinds.get("ida"), recs).keys(
+        [[0, 1, 2], [0, 1], [0, 1], [0, 1]])
+        for i, text in enumerate((three, three.replace('"s12"', '"s14"')))]
+    np.testing.assert_array_equal(keys[0][0], keys[1][0])
+    for iw in (1, 2):
+        assert not np.isin(keys[1][iw], keys[0]).any()
+    assert len(np.unique(keys[0])) == keys[0].size
+
+
 # ---- reuse for the other kinds of cells: IDA capacities and kept time histories -------------
 
 IDA = """\

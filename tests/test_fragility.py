@@ -848,3 +848,168 @@ def test_fragility_report_numbers_and_figures(ida_records, make_study, tmp_path)
     assert "### Stiffening the diaphragm: D1 -> D4" in text
     with pytest.raises(ValueError, match="not an IDA archive"):
         write_report(xr.Dataset({"x": ("a", [1.0])}), tmp_path / "bad")
+
+
+# ---- warm starts (issue 41): a hint from a neighbouring cell ----------------------------------
+
+WARM = 1.001 ** 32  # the warm grid's ratio for step 1.05, rtol 1e-3 (5 bisections a step)
+
+
+def test_a_hint_at_the_capacity_repeats_it_in_five_analyses():
+    """Hinted with the capacity a cold search found, the warm search walks up its grid of
+    ratio 1.001**32 from three steps below (the margin, 10 %: survivals), analyses the
+    hint (collapses) and rtol below it (survives): the same capacity, bit for bit, in 5
+    analyses instead of the cold search's 23."""
+    thr = 1.2345
+    analyse, cold = predicate(lambda s: s >= thr, lambda s: s / thr)
+    cap, _ = F.search(analyse, 0.5, 100.0, 1.05, 1e-3)
+    analyse, warm = predicate(lambda s: s >= thr, lambda s: s / thr)
+    again, censored = F.search(analyse, 0.5, 100.0, 1.05, 1e-3, hint=cap)
+    assert again == cap and not censored
+    assert len(cold) == 23 and len(warm) == 5
+    assert warm == pytest.approx([cap / WARM ** 3, cap / WARM ** 2, cap / WARM, cap,
+                                  cap / 1.001], rel=1e-13)
+
+
+@pytest.mark.parametrize("factor", [1.02, 1.5, 4.0, 0.3, 0.97])
+def test_a_wrong_hint_still_finds_the_capacity(factor):
+    """A hint above the capacity (the start collapses: down the grid in strides that
+    double, then up) or below it: the capacity lies within rtol above the threshold, with a
+    survivor within rtol below it; the search never strides over the hint."""
+    thr = 2.0
+    analyse, calls = predicate(lambda s: s >= thr, lambda s: s / thr)
+    cap, censored = F.search(analyse, 0.5, 100.0, 1.05, 1e-3, hint=factor * thr)
+    assert not censored and thr <= cap <= thr * 1.001
+    assert max(s for s in calls if s < thr) >= cap / 1.001
+    assert calls[0] == pytest.approx(factor * thr / WARM ** 3, rel=1e-13)  # the margin
+    if calls[0] < thr:  # the start survives: the walk up never strides over the hint
+        assert any(s == pytest.approx(factor * thr, rel=1e-13) for s in calls)
+    else:  # the start collapses: then 3, 6, 12 ... grid steps down to a survivor
+        down = [s for s in calls[:calls.index(min(calls)) + 1]]
+        steps = [round(math.log(a / b) / math.log(WARM)) for a, b in zip(down, down[1:],
+                                                                             strict=False)]
+        assert steps == [3 * 2 ** i for i in range(len(steps))] and steps
+
+
+def test_no_hint_nan_hint_and_cold_search_are_the_same():
+    for hint in (None, float("nan"), 0.0, -1.0):
+        analyse, calls = predicate(lambda s: s >= 1.7, lambda s: s / 1.7)
+        cap, _ = F.search(analyse, 1.0, 100.0, 1.05, 1e-3, hint=hint)
+        analyse, cold = predicate(lambda s: s >= 1.7, lambda s: s / 1.7)
+        assert (cap, calls) == (F.search(analyse, 1.0, 100.0, 1.05, 1e-3)[0], cold)
+
+
+def test_collapse_capacity_takes_a_neighbours_capacity_as_hint():
+    acc = np.sin(np.linspace(0, 20, 1001)) * 1.7
+    w = wall(16.0)
+    first = F.collapse_capacity(w, (acc, 0.01), kernel=threshold_kernel(3.0))
+    k = threshold_kernel(3.0)
+    warm = F.collapse_capacity(w, (acc, 0.01), kernel=k, hint=first)
+    assert warm.capacity == first.capacity and warm.analyses == 5 < first.analyses
+    k = threshold_kernel(3.0)
+    by_value = F.collapse_capacity(w, (acc, 0.01), kernel=k, hint=first.capacity)
+    assert 3.0 <= by_value.capacity <= 3.003 and by_value.analyses <= 6
+    with pytest.raises(urmx.errors.InputError, match="hint=-1"):
+        F.collapse_capacity(w, (acc, 0.01), kernel=threshold_kernel(3.0), hint=-1.0)
+
+
+CHAIN_IDA = IDA_STUDY.replace('walls = ["s08", "s18"]', 'walls = ["s08", "s12", "s18"]')
+
+
+def _capacities(ds):
+    return {k: np.asarray(ds[k].values).tobytes() for k in (
+        "collapse_intensity", "analyses", "intensity", "instability_ratio")}
+
+
+def test_chained_capacities_by_hand_and_whatever_the_batches(ida_records, make_study,
+                                                             tmp_path):
+    """Each wall starts from the wall before it on the same diaphragm, record and cor:
+    its capacity equals `cell_capacity` hinted with the previous wall's capacity (over its
+    record intensity, times the ratio of the walls' static accelerations to the power
+    `HINT_EXPONENT`); the numbers are the same, bit for bit, for batches of 1, 3 and 100
+    cells."""
+    from urmx.study.kinds import ida
+
+    path = make_study(CHAIN_IDA, "chain.toml")
+    runs = [_capacities(st.run_study(path, kernel=study_kernel, progress=False,
+                                     scheduler="serial", batch_size=n)) for n in (1, 3, 100)]
+    assert runs[0] == runs[1] == runs[2]
+    ds = st.run_study(path, kernel=study_kernel, progress=False, scheduler="serial")
+    study = load_study(path)
+    d = study.diaphragms[0]
+    walls = [study.wall(spec, d) for spec in study.walls]
+    rec = ACC["shake"] * 2.0
+    prev = None
+    for iw, w in enumerate(walls):
+        hint = math.nan if prev is None else ida.warm_hint(
+            prev.capacity / prev.record_intensity, F.static_acceleration(walls[iw - 1]),
+            F.static_acceleration(w))
+        prev = F.cell_capacity(study_kernel, w, rec, 0.01, 6.0, "pga", 0.8, "scale", 1e-3,
+                               1.5, 4.5, hint_scale=hint)
+        cell = ds.sel(wall=study.walls[iw].id, diaphragm=d.id, record="shake", cor=0.8)
+        assert float(cell.collapse_intensity) == prev.capacity
+        assert int(cell.analyses) == prev.analyses
+        cold = F.cell_capacity(study_kernel, w, rec, 0.01, 6.0, "pga", 0.8, "scale", 1e-3,
+                               1.5, 4.5)
+        # the hint decides which intensities are analysed (the first wall starts cold)
+        assert (prev.intensity.tobytes() == cold.intensity.tobytes()) == (iw == 0)
+
+
+def test_a_study_extended_by_a_wall_reuses_the_chain_before_it(ida_records, make_study,
+                                                               tmp_path):
+    """The same study with a wall added at the end of its list takes the first walls'
+    cells from the earlier archive and starts the new wall from them (their results
+    travel with its batch): the archive equals a fresh run's, bit for bit. A wall inserted
+    in the middle changes the hints of the walls after it: their keys differ, so they are
+    computed again (only the first wall is taken over)."""
+    from urmx.study import engine
+
+    fresh = _capacities(st.run_study(make_study(CHAIN_IDA, "fresh.toml"),
+                                     kernel=study_kernel, progress=False, scheduler="serial"))
+    out = tmp_path / "grow.nc"
+    two = CHAIN_IDA.replace('walls = ["s08", "s12", "s18"]', 'walls = ["s08", "s12"]')
+    st.run_study(make_study(two, "grow.toml"), out=out, kernel=study_kernel,
+                 progress=False, scheduler="serial")
+    ds = st.run_study(make_study(CHAIN_IDA, "grow.toml"), out=out, kernel=study_kernel,
+                      progress=False, scheduler="serial")
+    run = engine.last_run()
+    assert (run.from_archive, run.computed) == (16, 8)
+    assert _capacities(ds) == fresh
+    out = tmp_path / "insert.nc"
+    ends = CHAIN_IDA.replace('walls = ["s08", "s12", "s18"]', 'walls = ["s08", "s18"]')
+    st.run_study(make_study(ends, "insert.toml"), out=out, kernel=study_kernel,
+                 progress=False, scheduler="serial")
+    ds = st.run_study(make_study(CHAIN_IDA, "insert.toml"), out=out, kernel=study_kernel,
+                      progress=False, scheduler="serial")
+    run = engine.last_run()
+    assert (run.from_archive, run.computed) == (8, 16)
+    assert _capacities(ds) == fresh
+
+
+def test_capacities_are_the_same_bit_for_bit_with_the_capacity_tracking(library):
+    """`collapse_capacity` and the IDA kind run the kernel with ``track="capacity"`` (only
+    the drift trackers): on real cells of the FEMA P695 study, cold and warm-started, the
+    capacities, IDA points and ratios equal those of full runs (``track="all"``) bit for
+    bit."""
+    import functools
+
+    from urmx.kernel import run
+
+    s = load_study("fema-p695-ida")
+    full = functools.partial(run, track="all")
+    for rid, (wid, did) in (("p695-12-clwln", ("s20", "D1")), ("p695-01-mul009", ("s08", "D3")),
+                            ("p695-18-rio270", ("s16", "D2/both"))):
+        spec = next(w for w in s.walls if w.id == wid)
+        w = s.wall(spec, next(d for d in s.diaphragms if d.id == did))
+        rec = F.as_record(rid, library)
+        fast = F.collapse_capacity(w, rec)
+        slow = F.collapse_capacity(w, rec, kernel=full)
+        warm = F.collapse_capacity(w, rec, hint=fast.capacity * 1.03)
+        warm_slow = F.collapse_capacity(w, rec, kernel=full, hint=fast.capacity * 1.03)
+        for a, b in ((fast, slow), (warm, warm_slow)):
+            assert a.capacity == b.capacity and a.analyses == b.analyses
+            assert a.intensity.tobytes() == b.intensity.tobytes()
+            assert a.instability_ratio.tobytes() == b.instability_ratio.tobytes()
+        assert warm.analyses < fast.analyses
+        assert fast.capacity / 1.001 <= warm.capacity <= fast.capacity * 1.001 or \
+            warm.capacity < fast.capacity  # the same transition, or an earlier collapse

@@ -373,9 +373,12 @@ def test_a_design_extended_by_more_samples_computes_only_the_new_ones(make_study
     from urmx.records import Record
 
     recs = {k: Record(k, ACC[k], DT) for k in ACC}
-    blocks = [b.block for b, _ in urmx.study.batch_tasks(load_study(study(8)), recs, 3)]
-    assert {len(b["sample"]) for b in blocks} == {3, 2} and len(blocks) == 2 * 2 * 2 * 3
-    assert sorted(j for b in blocks if b["wall"] == [0] and b["diaphragm"] == [1]
+    # with IDA each chain of walls (warm starts, `urmx.fragility.capacity`) stays whole
+    size, walls = (6, [0, 1]) if extra else (3, [0])
+    blocks = [b.block for b, _ in urmx.study.batch_tasks(load_study(study(8)), recs, size)]
+    assert {len(b["sample"]) for b in blocks} == {3, 2}
+    assert len(blocks) == 2 * 2 * 3 * (1 if extra else 2)
+    assert sorted(j for b in blocks if b["wall"] == walls and b["diaphragm"] == [1]
                   and b["record"] == [1] for j in b["sample"]) == list(range(8))
     calls.clear()
     ds = urmx.run_study(study(8), out=out, scheduler="serial", progress=False, batch_size=3,
@@ -604,3 +607,27 @@ def test_the_uncertainty_report_answers_from_the_archive(make_study, use_records
     said = done.stderr.strip().splitlines()  # the alias's note, then the one-line error
     assert done.returncode == 2 and len(said) == 2 and "replaced by `urmx report`" in said[0]
     assert "not a sampling-study archive" in done.stderr
+
+
+def test_a_sampling_ida_study_extended_by_a_wall_starts_it_from_the_archive(make_study,
+                                                                            use_records,
+                                                                            tmp_path):
+    """With [study.ida], each sample's walls form a warm-start chain: a wall added at the
+    end of the list is computed from the capacities of the wall before it taken from the
+    earlier archive (per diaphragm, record and sample), and the archive equals a fresh
+    run's bit for bit; the walls before it are taken over, not computed."""
+    from urmx.study import engine
+
+    use_records(ACC, SCALE, DT)
+    calls: list = []
+    counted = _counting(calls)
+    three = STUDY.replace('walls = ["s08", "s16"]', 'walls = ["s08", "s16", "s24"]') + IDA
+    out = tmp_path / "grow.nc"
+    urmx.run_study(make_study(STUDY + IDA, "grow.toml"), out=out, scheduler="serial",
+                   progress=False, kernel=counted)
+    ds = urmx.run_study(make_study(three, "grow.toml"), out=out, scheduler="serial",
+                        progress=False, kernel=counted).load()
+    run = engine.last_run()
+    assert (run.from_archive, run.computed) == (2 * 2 * 2 * 5, 2 * 2 * 5)
+    _bitwise(ds, urmx.run_study(make_study(three, "fresh.toml"), scheduler="serial",
+                                progress=False, kernel=counted))

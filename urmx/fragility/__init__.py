@@ -30,6 +30,8 @@ from ..records.measures import dominant_frequency
 from ..records.record import Record, as_record
 from .capacity import (
     DEFAULT_IM,
+    HINT_EXPONENT,
+    MARGIN,
     MAX_STRIDE,
     RATIO_TARGET,
     RTOL,
@@ -82,7 +84,8 @@ from .risk import (
 )
 
 __all__ = [
-    "collapse_capacity", "cell_capacity", "CollapseCapacity", "search", "fit_lognormal",
+    "collapse_capacity", "cell_capacity", "CollapseCapacity", "search", "MARGIN", "HINT_EXPONENT",
+    "fit_lognormal",
     "fit_multiple_stripe", "stripe_counts", "LognormalFit", "record_intensity",
     "record_intensities", "spectral_intensities", "rocking_period", "static_acceleration",
     "diaphragm_period", "trilinear", "Record", "as_record", "check_im", "warm_up", "IMS",

@@ -10,6 +10,14 @@ innermost dimensions taken whole while they fit and the next one cut into even p
 Only the cells still to run are cut: a block holding finished cells (found per cell,
 `urmx.study.cells`) is halved along its longest side until every block is all to run, so
 a resumed run computes no finished cell whatever the batches of the run before were.
+
+A kind whose cells form chains (``Kind.chain``, a dimension along which each cell's result
+depends on the cell before it, as a warm-started search's does) is cut
+without splitting a chain: the chain's dimension is taken whole in every block (the
+others cut to about ``batch_size`` cells), and a block holding finished cells is halved
+along its other dimensions first and then cut along the chain only at finished cells, so
+that every block's predecessors are either in the block, before their successors, or
+finished before the run started (their results travel with the task, `Batch.before`).
 """
 
 from __future__ import annotations
@@ -31,6 +39,10 @@ class Batch:
     block: dict[str, list[int]]
     key: str = ""
     cells: np.ndarray | None = field(default=None, repr=False)
+    #: a chained kind's outputs of the cells just before the block along the chain (the
+    #: block's shape with one index on the chain's dimension; NaN where the block starts its
+    #: chain), set when it is made (`urmx.study.engine`); None for other kinds
+    before: dict[str, np.ndarray] | None = field(default=None, repr=False)
 
     @property
     def record(self) -> int:
@@ -77,6 +89,16 @@ def extents(shape: tuple[int, ...], batch_size: int) -> tuple[int, ...]:
     return tuple(out)
 
 
+def chain_extents(shape: tuple[int, ...], batch_size: int, axis: int) -> tuple[int, ...]:
+    """Block lengths as :func:`extents`, with dimension `axis` (a chain) always whole: the
+    other dimensions cut to about ``batch_size / shape[axis]`` cells a block."""
+    rest = list(shape)
+    rest[axis] = 1
+    out = list(extents(tuple(rest), max(1, int(batch_size) // max(1, shape[axis]))))
+    out[axis] = shape[axis]
+    return tuple(out)
+
+
 def _starts(n: int, length: int) -> np.ndarray:
     return np.arange(0, n, length)
 
@@ -89,21 +111,37 @@ def _counts(todo: np.ndarray, lengths: tuple[int, ...]) -> np.ndarray:
     return counts
 
 
-def _split(ranges: list[range], todo: np.ndarray) -> Iterator[list[range]]:
+def _runs(todo: np.ndarray) -> list[tuple[int, int]]:
+    """The maximal runs [a, b) of True in a 1-D flag array."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], todo.astype(np.int8), [0]])))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def _split(ranges: list[range], todo: np.ndarray, chain: int | None = None
+           ) -> Iterator[list[range]]:
     """The blocks of all-to-run cells in a block (`todo` its cells' flags): the block, or
-    its halves along the longest side, recursively."""
+    its halves along the longest side, recursively; with a `chain` axis, halved along the
+    other axes first, then cut along the chain at finished cells only."""
     if todo.all():
         yield ranges
         return
     if not todo.any():
         return
-    axis = int(np.argmax(todo.shape))
+    sizes = list(todo.shape)
+    if chain is not None:
+        sizes[chain] = 0
+        if max(sizes) <= 1:  # one chain: its runs of cells to run
+            r = ranges[chain]
+            for a, b in _runs(todo.reshape(-1)):
+                yield [*ranges[:chain], range(r.start + a, r.start + b), *ranges[chain + 1:]]
+            return
+    axis = int(np.argmax(sizes))
     half = todo.shape[axis] // 2
     r = ranges[axis]
     for part, sub in ((range(r.start, r.start + half), np.take(todo, range(half), axis)),
                       (range(r.start + half, r.stop),
                        np.take(todo, range(half, todo.shape[axis]), axis))):
-        yield from _split([*ranges[:axis], part, *ranges[axis + 1:]], sub)
+        yield from _split([*ranges[:axis], part, *ranges[axis + 1:]], sub, chain)
 
 
 class Cut:
@@ -121,6 +159,7 @@ class Cut:
 
     def __init__(self, cells: Any, batch_size: int, done: np.ndarray | None = None):
         self.cells, self.batch_size, self.done = cells, batch_size, done
+        self.chain = getattr(cells, "chain", None)  # the axis of a chained kind's chains
 
     def _records(self) -> Iterator[tuple[list[np.ndarray], np.ndarray, tuple[int, ...]]]:
         """Per record with cells to run: (index arrays of its sub-grid per dimension, its
@@ -142,7 +181,8 @@ class Cut:
                 todo = np.ones(shape, dtype=bool)
             else:
                 todo = ~self.done[c.flat(axes).ravel()].reshape(shape)
-            yield axes, todo, extents(shape, self.batch_size)
+            yield axes, todo, (extents(shape, self.batch_size) if self.chain is None else
+                               chain_extents(shape, self.batch_size, self.chain))
 
     def counts(self) -> tuple[int, int]:
         """(blocks of the regular cut that hold nothing to run, all its blocks)."""
@@ -162,6 +202,6 @@ class Cut:
                 ranges = [range(i * n, min(len(a), (i + 1) * n))
                           for i, n, a in zip(at, lengths, axes, strict=True)]
                 sub = todo[tuple(slice(r.start, r.stop) for r in ranges)]
-                for part in _split(ranges, sub):
+                for part in _split(ranges, sub, self.chain):
                     yield Batch({k: axes[d][r.start:r.stop].tolist()
                                  for d, (k, r) in enumerate(zip(names, part, strict=True))})

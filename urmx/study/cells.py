@@ -15,7 +15,16 @@ hash of everything that decides its result:
   and default impact law,
   the kernel's name, `urmx.jitcache.SOURCE_HASH` and the urmx version;
 - whether the kind keeps extra arrays for the cell (``Kind.extras``: a grid's kept time
-  histories), so that a cell computed without them is not taken for one with them.
+  histories), so that a cell computed without them is not taken for one with them;
+- for a kind whose cells form chains (``Kind.chain``: a dimension along which each cell
+  starts from the result of the cell before it, e.g. a search warm-started from the
+  previous wall the study pairs with the record; `urmx.study.kinds.Kind`),
+  the keys of every cell before it in its chain: the key of a chain's first cell is its
+  own, the next one's folds its own into the key before it (salted with what the kind
+  says the chain means, ``Kind.chain_tag``: the search's warm-start margin). A cell is
+  thus never taken for one computed from another hint; a study extended by a wall at the
+  end of its list keeps its cells, one extended in the middle computes the walls after
+  the new one again.
 
 Speed: each dimension's values are hashed once (SHA-256 of their JSON; a float dimension's
 values by a bijective 64-bit mix of their bits, vectorised), and a cell's key folds its
@@ -140,6 +149,9 @@ class Cells:
         #: the records of one step together: a wall's kernel tables are per step)
         self.record_dt = [float(records[r].dt) for r in study.records]
         self._pairs: np.ndarray | None = None
+        chain = getattr(kind, "chain", None)
+        #: the axis of the kind's chains (None: the cells are independent)
+        self.chain = self.names.index(chain) if chain else None
 
     def _extras(self) -> dict[int, str]:
         """Flat index -> label of the cells whose run keeps extra arrays."""
@@ -172,13 +184,35 @@ class Cells:
                    np.zeros((1,) * len(block), dtype=np.int64))
 
     def keys(self, block: list) -> np.ndarray:
-        """The keys of a block's cells, in the block's shape (uint64).
+        """The keys of a block's cells, in the block's shape (uint64); for a chained kind,
+        each folded with the keys of the cells before it in its chain (module docstring).
 
         Parameters
         ----------
         block : list of list of int
             The block's index list on each dimension.
         """
+        if self.chain is None:
+            return self._own_keys(block)
+        ax = self.chain
+        upto = int(max(block[ax], default=-1)) + 1
+        full = [*block[:ax], list(range(upto)), *block[ax + 1:]]
+        own, runs = self._own_keys(full), self.runs(full)
+        salt = np.uint64(digest64(["chain", getattr(self.kind, "chain_tag", None)]))
+        out = np.empty_like(own)
+        shape = list(own.shape)
+        shape[ax] = 1
+        last, first = np.zeros(shape, np.uint64), np.ones(shape, dtype=bool)
+        for i in range(upto):
+            k = np.take(own, [i], axis=ax)
+            k = np.where(first, k, mix(mix(last ^ salt) ^ k))
+            ran = np.take(runs, [i], axis=ax)
+            last, first = np.where(ran, k, last), first & ~ran
+            out[(slice(None),) * ax + (i,)] = np.squeeze(k, axis=ax)
+        return np.take(out, np.asarray(block[ax], dtype=np.int64), axis=ax)
+
+    def _own_keys(self, block: list) -> np.ndarray:
+        """The keys of a block's cells from their own inputs alone (block shape)."""
         k = self.base
         for hashes, ix in zip(self.hashes, block, strict=True):
             k = mix(k[..., None] ^ hashes[np.asarray(ix, dtype=np.int64)])

@@ -152,12 +152,41 @@ def last_run() -> RunStats | None:
     return _LAST[-1] if _LAST else None
 
 
-def _made(cells: Cells, batch: Batch, records: dict, kernel: Callable | None
-          ) -> tuple[Batch, dict[str, Any]]:
-    """A batch with its cells' keys, its key and its task (the kind's ``task``)."""
+def _made(cells: Cells, batch: Batch, records: dict, kernel: Callable | None,
+          sources: Sources | None = None) -> tuple[Batch, dict[str, Any]]:
+    """A batch with its cells' keys, its key, the results its chains start from (a
+    chained kind, `_before`) and its task (the kind's ``task``)."""
     batch.cells = cells.keys(list(batch.block.values()))
     batch.key = batch_key(f"{cells.kind.name}-", batch.cells)
+    if cells.chain is not None:
+        batch.before = _before(cells, batch, sources)
     return batch, cells.kind.task(cells.study, records, batch, kernel)
+
+
+def _before(cells: Cells, batch: Batch, sources: Sources | None) -> dict[str, np.ndarray]:
+    """A chained kind's outputs (``Kind.chained``) of the cells just before the batch's
+    block along the chain (the previous wall the study pairs with the record), found
+    finished before the run (`urmx.study.batches.Cut` never puts a predecessor in another
+    batch of the run); NaN where the block starts its chains."""
+    names, ax = cells.names, cells.chain
+    block = [list(v) for v in batch.block.values()]
+    shape = [len(v) for v in block]
+    shape[ax] = 1
+    out = {name: np.full(shape, np.nan) for name in cells.kind.chained}
+    paired = np.flatnonzero(cells.runnable()[:, batch.record]) if names[ax] == "wall" \
+        else np.arange(cells.shape[ax])
+    at = int(np.searchsorted(paired, block[ax][0]))
+    if at == 0 or sources is None:
+        return out
+    block[ax] = [int(paired[at - 1])]
+    flat = cells.flat(block).ravel()
+    if not (sources.src[flat] >= 0).all():
+        raise RunError(f"internal: a batch of {cells.study.name!r} would start a chain "
+                       "from a cell not computed yet")
+    for name in cells.kind.chained:
+        out[name] = sources.values(flat, name).reshape(shape)
+    out["index"] = np.array(block[ax][0])  # the predecessor's index on the chain
+    return out
 
 
 def batch_tasks(study: Study, records: dict, batch_size: int = 16,
@@ -496,7 +525,7 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
     for line in (*notes, *_notes(cut, stats, store.folder if store else None,
                                   archive[1] if archive else None)):
         bar.note(line)
-    batches = (_made(cells, b, records, kernel) for b in cut)
+    batches = (_made(cells, b, records, kernel, sources) for b in cut)
     try:
         _compute_all(batches, stats.runs - stats.from_parts - stats.from_archive, records,
                      study.records, scheduler, _saver(cells, sources, bar, stats), kind.run,

@@ -175,6 +175,15 @@ class Sources:
         shape = tuple(len(r) for r in box)
         return {k: v.reshape(*shape, *v.shape[1:]) for k, v in out.items()}
 
+    def values(self, flat: np.ndarray, name: str) -> np.ndarray:
+        """Output `name` (a per-cell scalar) of the cells at grid positions `flat`, as
+        float64 (NaN where no result is found)."""
+        out = np.full(np.size(flat), np.nan)
+        for i, f in enumerate(np.asarray(flat).ravel()):
+            if self.src[f] >= 0:
+                out[i] = self._load(int(self.src[f]))[name][self.off[f]]
+        return out
+
     def eager(self) -> dict[str, np.ndarray]:
         """Every output over the whole grid, in memory."""
         return self.gather([range(n) for n in self.cells.shape], 0, self.cells.size)

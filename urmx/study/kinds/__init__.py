@@ -83,6 +83,12 @@ Optional, with defaults:
 ``cell_bytes(study) -> float``
     Bytes of one cell's outputs in the archive, for the size check before a run (default
     8 per output).
+``chain``, ``chain_tag``, ``chained``
+    A dimension along which each cell starts from the result of the cell before it (the
+    IDA kinds' ``wall``: warm-started searches), what that means (folded into the cells'
+    keys, `urmx.study.cells`) and the outputs the next cell needs; the cut never splits a
+    chain and a block's finished predecessors travel with it as ``Batch.before``
+    (`urmx.study.batches`). Default: none, independent cells.
 
 A new kind is one module holding its `Kind`, added to :data:`BUILT_IN` here, or registered
 from outside with ``urmx.study.kinds.register(kind)`` (a test's toy kind does so).

@@ -11,6 +11,14 @@ the study's pairs leave out is missing in every output: NaN, with ``censored``,
 ``analyses`` and ``event_limits`` float64 in the Dataset and int32 with the ``_FillValue``
 on disk.
 
+The cells form chains along ``wall`` (``Kind.chain``): per (diaphragm, record, cor), each
+wall's search starts from the capacity of the wall before it that the study pairs with the
+record (:func:`warm_hint`; `urmx.fragility.capacity`, "Warm start"), the first one cold. A
+batch computes its walls in order; the cut never splits a chain and a chain's finished
+predecessor travels with the batch (:func:`hints`); the cells' keys fold the chain before
+them (`urmx.study.cells`). The kernel runs with ``track="capacity"`` (the default kernel
+only: another integrator is called as given).
+
 The capacities are scale factors times the record's intensity, so one run holds the
 capacities in every measure: the archive keeps the scale factor at collapse
 (``collapse_scale``) and each record's intensity at scale 1 in every measure
@@ -57,6 +65,9 @@ CELL_OUTPUTS = ("collapse_intensity", "censored", "analyses", "event_limits",
                 "instability_ratio")
 MISSING = "NaN where the study's pairs leave the cell out (not run)"
 DIMS = ("wall", "diaphragm", "record", "cor")  # the cells: no added dimension
+#: what the chain of warm starts means (in the chained cells' keys, `urmx.study.cells`)
+CHAIN_TAG = {"warm_start": "previous paired wall", "margin": fragility.MARGIN,
+             "exponent": fragility.HINT_EXPONENT, "grid": "(1 + rtol) ** 2 ** j"}
 
 
 @dataclass(frozen=True)
@@ -177,7 +188,31 @@ def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> di
                         for idp in b["diaphragm"]] for iw in b["wall"]],
                 dt=rec.dt, scale_factor=rec.scale_factor, record=rec.digest,
                 cor=[study.cor[i] for i in b["cor"]], impact=study.impact,
-                ida=study.settings.to_dict(), kernel=kernel, t_rest=study.t_rest)
+                ida=study.settings.to_dict(), kernel=kernel, t_rest=study.t_rest,
+                hint=hints(batch.before, lambda iw: [
+                    study.wall(study.walls[iw], study.diaphragms[idp])
+                    for idp in b["diaphragm"]]))
+
+
+def hints(before: dict[str, np.ndarray] | None, walls: Callable[[int], list]
+          ) -> tuple[np.ndarray, np.ndarray] | None:
+    """What the block's first wall starts its searches from, per (diaphragm, cor) of the
+    block: the capacity of the wall before it in the chain as a scale factor (its capacity
+    over its record intensity; NaN: a cold start) and that wall's static acceleration
+    [m s-2] (`walls(index)`: the block's diaphragms' walls at that wall index); None when
+    the block starts every chain."""
+    if before is None or not np.isfinite(before["capacity"]).any():
+        return None
+    scale = (before["capacity"] / before["unit"])[0, :, 0, :]
+    static = np.array([fragility.static_acceleration(w) for w in walls(int(before["index"]))])
+    return scale, np.broadcast_to(static[:, None], scale.shape).copy()
+
+
+def warm_hint(scale: float, static_before: float, static: float) -> float:
+    """The scale factor a wall's search starts from (`urmx.fragility.capacity`, "Warm
+    start"): the capacity of the wall before it in the chain, times the ratio of the two
+    walls' static accelerations to the power `fragility.HINT_EXPONENT` (NaN: cold)."""
+    return float(scale * (static / static_before) ** fragility.HINT_EXPONENT)
 
 
 _PREDOMINANT: dict[tuple, float] = {}  # a worker's predominant frequencies, by record
@@ -199,6 +234,8 @@ def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
     ``intensity`` and ``ratio`` with a last axis of points, NaN-padded; the record's
     intensity ``unit`` for the cell's wall and its ``predominant`` frequency). Numpy only."""
     kernel = task["kernel"] or run_kernel
+    # the default kernel tracks only what the search needs (bit-identical capacities)
+    track = fragility.capacity.TRACK if task["kernel"] is None else None
     rest = grid.rest_time(task)
     if rest:
         kernel = functools.partial(kernel, **rest)
@@ -209,10 +246,18 @@ def run_batch(task: dict, acceleration: np.ndarray) -> dict[str, np.ndarray]:
     unit = fragility.record_intensities(acc, dt, ida["im"], walls,
                                         ida.get("sa_avg_range")).reshape(shape[:2])
     results = {}
-    for iw, idp, _, ic in np.ndindex(*shape):
-        results[iw, idp, ic] = fragility.cell_capacity(
-            kernel, task["walls"][iw][idp], acc, dt, float(unit[iw, idp]), ida["im"],
-            task["cor"][ic], task["impact"], ida["rtol"], ida["step"], ida["max_intensity"])
+    nan = np.full((shape[1], shape[3]), np.nan)
+    prev, static = (np.array(a) for a in (task.get("hint") or (nan, nan)))
+    for iw, idp, _, ic in np.ndindex(*shape):  # each wall after the one before it
+        wall = task["walls"][iw][idp]
+        a = fragility.static_acceleration(wall)
+        r = results[iw, idp, ic] = fragility.cell_capacity(
+            kernel, wall, acc, dt, float(unit[iw, idp]), ida["im"],
+            task["cor"][ic], task["impact"], ida["rtol"], ida["step"], ida["max_intensity"],
+            hint_scale=warm_hint(prev[idp, ic], static[idp, ic], a), track=track)
+        # the next wall's, as a later batch computes it from the stored outputs
+        prev[idp, ic] = np.float64(r.capacity) / np.float64(unit[iw, idp])
+        static[idp, ic] = a
     k = max(r.analyses for r in results.values())
     out = {"capacity": np.full(shape, np.nan), "censored": np.zeros(shape, bool),
            "analyses": np.zeros(shape, np.int32), "event_limits": np.zeros(shape, np.int32),
@@ -414,4 +459,5 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
             task=task, run=run_batch, assemble=assemble, reopen=reopen, archived=ARCHIVED,
             cell_bytes=cell_bytes, counts=counts, keys=KEYS,
-            warm_up=warm_up, dt_above=WINDOW)
+            warm_up=warm_up, dt_above=WINDOW, chain="wall", chain_tag=CHAIN_TAG,
+            chained=("capacity", "unit"))

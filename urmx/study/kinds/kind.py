@@ -32,6 +32,13 @@ class Kind:
     keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
     warm_up: Callable[[], None] | None = None  # loads its integrator (the kernel's warm_up)
     dt_above: float = 0.0  # a record's time step must exceed it (its integrator's window)
+    #: the dimension along which each cell depends on the cell before it (the IDA kinds'
+    #: ``wall``: a warm-started capacity search); None: independent cells
+    chain: str | None = None
+    #: what the chaining means (folded into the chained cells' keys, `urmx.study.cells`)
+    chain_tag: Any = None
+    #: the outputs of a cell its successor in the chain needs (`urmx.study.batches.Batch`)
+    chained: tuple[str, ...] = ()
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""

@@ -29,7 +29,10 @@ grid's peak outputs and ``status`` per cell; collapse capacities give the IDA ki
 outputs, ``median_collapse_intensity`` and ``dispersion`` per (wall, diaphragm, sample) over
 the records, and per (wall, diaphragm) the fit over records and samples together
 (``total_median_collapse_intensity``, ``total_dispersion``) with its parts
-(``record_dispersion``, ``model_dispersion``; `urmx.uncertainty.spread`).
+(``record_dispersion``, ``model_dispersion``; `urmx.uncertainty.spread`). With
+``[study.ida]`` the cells form the IDA kind's chains along ``wall`` (per diaphragm, record
+and sample: each wall's search starts from the capacity of the wall before it,
+`urmx.study.kinds.ida`); a study of one wall runs every cell cold.
 """
 
 from __future__ import annotations
@@ -191,9 +194,14 @@ def task(study: Any, records: dict, batch: Batch, kernel: Callable | None) -> di
                 tail=study.tail, t_rest=study.t_rest, history=[], kernel=kernel,
                 shape=(len(b["wall"]), len(b["diaphragm"]), 1, 1)))
         else:
+            before = None if batch.before is None else {
+                k: (v[..., n:n + 1] if v.ndim else v) for k, v in batch.before.items()}
             per_sample.append(dict(walls=cells, dt=rec.dt, scale_factor=rec.scale_factor,
                                    record=rec.digest, cor=[cor], impact=law,
                                    t_rest=study.t_rest,
+                                   hint=ida.hints(before, lambda iw, j=j: [
+                                       _walls(study, iw, idp, [j])[0]
+                                       for idp in b["diaphragm"]]),
                                    ida=settings.ida.to_dict(), kernel=kernel))
     return {"samples": per_sample, "ida": settings.ida is not None}
 
@@ -465,4 +473,5 @@ KIND_IDA = Kind(name="sampling-ida", table="sampling", combines=("ida",), unit="
                 run=run_batch, assemble=assemble, counts=counts, keys=SAMPLING_KEYS,
                 archived={**ida.ARCHIVED, "unit": "record_intensity"},
                 cell_bytes=ida.cell_bytes, warm_up=ida.KIND.warm_up,
-                dt_above=ida.KIND.dt_above)
+                dt_above=ida.KIND.dt_above, chain=ida.KIND.chain,
+                chain_tag=ida.KIND.chain_tag, chained=ida.KIND.chained)

@@ -21,6 +21,7 @@ The folder is ``urmx/__pycache__/numba-<hash>`` when the package folder is writa
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
 import os
@@ -188,12 +189,54 @@ _LOCK = threading.RLock()
 _MATERIALIZED = False
 
 
+def _helper_class():
+    """numba's dispatcher for a helper (a function without a CPython wrapper: only
+    compiled code calls it) that compiles one version per type of its arguments, not one
+    per literal value.
+
+    Called from compiled code with a constant (``_put(..., 0)``, ``_newton(..., 1)``),
+    numba's dispatcher types that argument as a literal (``Literal[int](0)``) and compiles
+    the helper once for each value: 93 compiles of 53 functions in the kernel. The helpers
+    are inlined into their callers (``forceinline``) or small, so LLVM propagates the
+    constant after inlining as it did in the literal version; the values are the same
+    (the same operations in the same order). Here the arguments' types lose their literal
+    value before numba looks for a version to compile."""
+    global _HELPER
+    if _HELPER is not None:
+        return _HELPER
+    from numba.core import registry, types
+
+    class UrmxHelper(registry.CPUDispatcher):
+        """A CPU dispatcher whose calls from compiled code drop literal argument types."""
+
+        def get_call_template(self, args, kws):
+            return super().get_call_template(
+                tuple(types.unliteral(a) for a in args),
+                {k: types.unliteral(v) for k, v in kws.items()})
+
+    _HELPER = UrmxHelper
+    return _HELPER
+
+
+_HELPER = None
+
+
+def _dispatcher(py_func, options: dict):
+    """numba's dispatcher of a function (numba imported); a helper's of
+    :func:`_helper_class`."""
+    import numba
+
+    dispatcher = numba.njit(**options)(py_func)
+    if options.get("no_cpython_wrapper"):
+        dispatcher.__class__ = _helper_class()
+    return dispatcher
+
+
 def jit(**options):
     """``numba.njit(**options)`` without importing numba until a compiled function is used."""
     def decorate(py_func):
         if _MATERIALIZED:
-            import numba
-            return numba.njit(**options)(py_func)
+            return _dispatcher(py_func, options)
         lazy = Lazy(py_func, options)
         _LAZY.append(lazy)
         return lazy
@@ -210,13 +253,11 @@ def materialize() -> None:
     with _LOCK:
         if _MATERIALIZED:
             return
-        import numba
-
         locator, impl = _locator_class()
         if not any(c.__name__ == locator.__name__ for c in impl._locator_classes):
             impl._locator_classes.insert(0, locator)
         for lazy in _LAZY:
-            lazy.dispatcher = numba.njit(**lazy.options)(lazy.py_func)
+            lazy.dispatcher = _dispatcher(lazy.py_func, lazy.options)
         for name, module in list(sys.modules.items()):
             if module is not None and (name == "urmx" or name.startswith("urmx.")):
                 space = vars(module)
@@ -224,3 +265,73 @@ def materialize() -> None:
                     if isinstance(value, Lazy):
                         space[key] = value.dispatcher
         _MATERIALIZED = True
+
+
+
+# ---- compiling for the native object ----------------------------------------------------
+
+def _ir_only_patches():
+    """numba's two methods that :func:`ir_only` replaces: (class, name, replacement)."""
+    from numba import _dynfunc
+    from numba.core import codegen, cpu
+
+    library_class, context_class = codegen.JITCodeLibrary, cpu.CPUContext
+    finalize, executable = library_class._finalize_final_module, context_class.get_executable
+
+    def finalize_ir(self):
+        """numba's finalisation of a library less its machine code, when no function of it
+        has a CPython wrapper (only compiled code calls them, and a caller links in the
+        library's optimised module, not its machine code)."""
+        if any(f.name.startswith("cpython.") and not f.is_declaration
+               for f in self._final_module.functions):
+            return finalize(self)
+        self._finalize_dynamic_globals()
+        self._verify_declare_only_symbols()
+        self._urmx_ir_only = True
+        self._finalized = True
+        return None
+
+    def executable_ir(self, library, fndesc, env):
+        """What numba makes for a function without a CPython wrapper (its address 0),
+        without asking the engine for machine code; the environment's address is not set
+        (no engine holds the module, and the native object does not read it)."""
+        library._ensure_finalized()
+        if not getattr(library, "_urmx_ir_only", False):
+            return executable(self, library, fndesc, env)
+        return _dynfunc.make_function(fndesc.lookup_module(), fndesc.qualname.split(".")[-1],
+                                      f"compiled wrapper for {fndesc.qualname!r}", 0, env,
+                                      (library,))
+
+    return ((library_class, "_finalize_final_module", finalize_ir),
+            (context_class, "get_executable", executable_ir))
+
+
+@contextlib.contextmanager
+def ir_only():
+    """While it is open, numba compiles urmx's helpers to optimised LLVM IR only: no
+    machine code for a library none of whose functions has a CPython wrapper.
+
+    numba makes machine code for every function it compiles (its library added to the
+    JIT engine and finalised), also for a helper that only compiled code calls and whose
+    optimised module is linked into its caller anyway. :mod:`urmx.native` takes the
+    loop's optimised module and emits its object itself, so that machine code (2.2 s of a
+    20 s cold compile, 96 libraries) is never used. Holds numba's compiler lock, so no
+    other thread compiles meanwhile; a library finalised here serves later compiles as
+    before (they link its module), but its functions cannot be called from Python, as
+    without a CPython wrapper they cannot anyway."""
+    materialize()
+    from numba.core.compiler_lock import global_compiler_lock
+
+    with global_compiler_lock:
+        patches = _ir_only_patches()
+        saved = [(cls, name, cls.__dict__.get(name)) for cls, name, _ in patches]
+        try:
+            for cls, name, fn in patches:
+                setattr(cls, name, fn)
+            yield
+        finally:
+            for cls, name, fn in saved:
+                if fn is None:  # inherited: the class's own entry goes
+                    delattr(cls, name)
+                else:
+                    setattr(cls, name, fn)

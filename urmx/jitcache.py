@@ -21,7 +21,6 @@ The folder is ``urmx/__pycache__/numba-<hash>`` when the package folder is writa
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import importlib.util
 import os
@@ -267,71 +266,3 @@ def materialize() -> None:
         _MATERIALIZED = True
 
 
-
-# ---- compiling for the native object ----------------------------------------------------
-
-def _ir_only_patches():
-    """numba's two methods that :func:`ir_only` replaces: (class, name, replacement)."""
-    from numba import _dynfunc
-    from numba.core import codegen, cpu
-
-    library_class, context_class = codegen.JITCodeLibrary, cpu.CPUContext
-    finalize, executable = library_class._finalize_final_module, context_class.get_executable
-
-    def finalize_ir(self):
-        """numba's finalisation of a library less its machine code, when no function of it
-        has a CPython wrapper (only compiled code calls them, and a caller links in the
-        library's optimised module, not its machine code)."""
-        if any(f.name.startswith("cpython.") and not f.is_declaration
-               for f in self._final_module.functions):
-            return finalize(self)
-        self._finalize_dynamic_globals()
-        self._verify_declare_only_symbols()
-        self._urmx_ir_only = True
-        self._finalized = True
-        return None
-
-    def executable_ir(self, library, fndesc, env):
-        """What numba makes for a function without a CPython wrapper (its address 0),
-        without asking the engine for machine code; the environment's address is not set
-        (no engine holds the module, and the native object does not read it)."""
-        library._ensure_finalized()
-        if not getattr(library, "_urmx_ir_only", False):
-            return executable(self, library, fndesc, env)
-        return _dynfunc.make_function(fndesc.lookup_module(), fndesc.qualname.split(".")[-1],
-                                      f"compiled wrapper for {fndesc.qualname!r}", 0, env,
-                                      (library,))
-
-    return ((library_class, "_finalize_final_module", finalize_ir),
-            (context_class, "get_executable", executable_ir))
-
-
-@contextlib.contextmanager
-def ir_only():
-    """While it is open, numba compiles urmx's helpers to optimised LLVM IR only: no
-    machine code for a library none of whose functions has a CPython wrapper.
-
-    numba makes machine code for every function it compiles (its library added to the
-    JIT engine and finalised), also for a helper that only compiled code calls and whose
-    optimised module is linked into its caller anyway. :mod:`urmx.native` takes the
-    loop's optimised module and emits its object itself, so that machine code (2.2 s of a
-    20 s cold compile, 96 libraries) is never used. Holds numba's compiler lock, so no
-    other thread compiles meanwhile; a library finalised here serves later compiles as
-    before (they link its module), but its functions cannot be called from Python, as
-    without a CPython wrapper they cannot anyway."""
-    materialize()
-    from numba.core.compiler_lock import global_compiler_lock
-
-    with global_compiler_lock:
-        patches = _ir_only_patches()
-        saved = [(cls, name, cls.__dict__.get(name)) for cls, name, _ in patches]
-        try:
-            for cls, name, fn in patches:
-                setattr(cls, name, fn)
-            yield
-        finally:
-            for cls, name, fn in saved:
-                if fn is None:  # inherited: the class's own entry goes
-                    delattr(cls, name)
-                else:
-                    setattr(cls, name, fn)

@@ -240,8 +240,7 @@ def _compile(layout, loop: Loop, meta_path: Path | None):
             arrays[p] if p in arrays else scalar[p])
 
     sig = tuple(numba_type(p) for p in loop.params)
-    with jitcache.ir_only():
-        dispatcher.compile(sig)
+    dispatcher.compile(sig)
     cres = dispatcher.overloads[sig]
     library = cres.library
     ll = _llvm()

@@ -13,6 +13,10 @@
   that hash is also the source stamp numba checks: a change in any of them means a new
   folder and a fresh compile, never a stale load. In the package's own ``__pycache__`` the
   folders of earlier sources are removed when a new one is made.
+* **One version per argument types.** A helper (a function without a Python wrapper,
+  which only compiled code calls) is compiled once per types of its arguments, not once
+  per literal constant a caller passes (:func:`_helper_class`): the kernel's first compile
+  makes 58 numba compiles instead of 93, with the same results bit for bit.
 
 The folder is ``urmx/__pycache__/numba-<hash>`` when the package folder is writable, else
 ``<user cache>/urmx/numba-<hash>``; with ``NUMBA_CACHE_DIR`` set it is

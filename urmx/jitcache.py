@@ -217,11 +217,20 @@ def _helper_class():
                 tuple(types.unliteral(a) for a in args),
                 {k: types.unliteral(v) for k, v in kws.items()})
 
+    # importable as urmx.jitcache.UrmxHelper (module __getattr__), so that a helper's
+    # dispatcher pickles as numba's do
+    UrmxHelper.__module__, UrmxHelper.__qualname__ = __name__, "UrmxHelper"
     _HELPER = UrmxHelper
     return _HELPER
 
 
 _HELPER = None
+
+
+def __getattr__(name: str):
+    if name == "UrmxHelper":  # (numba imported here)
+        return _helper_class()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _dispatcher(py_func, options: dict):

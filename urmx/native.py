@@ -241,12 +241,13 @@ def _compile(layout, loop: Loop, meta_path: Path | None):
 
     sig = tuple(numba_type(p) for p in loop.params)
     data = _compile_with_shim(dispatcher, sig, layout, loop)
-    if data is None:  # compiled before in this process: its optimised module and the shim
+    if data is None:  # compiled before in this process: emitted from its optimised module
         cres = dispatcher.overloads[sig]
         ll = _llvm()
         module = ll.parse_assembly(str(cres.library._final_module))
-        module.link_in(ll.parse_assembly(_shim(layout, loop, module.get_function(
-            cres.fndesc.mangled_name))))
+        if not any(f.name == SYMBOL and not f.is_declaration for f in module.functions):
+            module.link_in(ll.parse_assembly(_shim(layout, loop, module.get_function(
+                cres.fndesc.mangled_name))))
         data = cres.library._codegen._tm.emit_object(module)
     fn = _engine(data, SYMBOL)
     if meta_path is not None:

@@ -1,18 +1,18 @@
 """The kernel's integration loop as native code: compiled once by numba, loaded in ms.
 
-numba compiles the loop (:func:`urmx.kernel.loop._march`, 15 arguments, 51 arrays in all) as
-usual. A small LLVM function, ``urmx_march_native(ret, exc, iv, fv)``, is then added to
-its module: it reads the loop's arguments from two blocks (an int64 block with the address
-and shape of each array of ``urmx.kernel.loop.ARRAYS``, one slot of ``SLOT`` entries each,
-followed by the integer arguments; a float64 block with the real ones), passes them as
-numba passes arguments (an array as meminfo, parent, size, item size, data, shape and
-strides) and calls the loop. The module (the loop as numba optimised it, untouched) and
-the shim are compiled to an object file, which refers to no symbol outside itself, and
-written into urmx's cache folder (:mod:`urmx.jitcache`: keyed on the compiled sources and
-the numba, llvmlite and Python versions; here also on the CPU, since the code uses this
-CPU's instruction set). Every process, the compiling one included, loads that object with
-llvmlite's MCJIT (a few ms) and calls the shim through ctypes: a warm process never
-imports numba, whose import and cache loading cost about 0.8 s a process.
+numba compiles the loop (:func:`urmx.kernel.loop._march`, 15 arguments, 51 arrays in all)
+as usual. A small LLVM function, ``urmx_march_native(ret, exc, iv, fv)``, is added to its
+module before numba optimises it: it reads the loop's arguments from two blocks (an int64
+block with the address and shape of each array of ``urmx.kernel.loop.ARRAYS``, one slot of
+``SLOT`` entries each, followed by the integer arguments; a float64 block with the real
+ones), passes them as numba passes arguments (an array as meminfo, parent, size, item size,
+data, shape and strides) and calls the loop. The object file numba's JIT makes of that
+module (the loop and the shim, compiled once), which refers to no symbol outside itself, is
+kept and written into urmx's cache folder (:mod:`urmx.jitcache`: keyed on the compiled
+sources and the numba, llvmlite and Python versions; here also on the CPU, since the code
+uses this CPU's instruction set). Every process, the compiling one included, loads that
+object with llvmlite's MCJIT (a few ms) and calls the shim through ctypes: a warm process
+never imports numba, whose import and cache loading cost about 0.8 s a process.
 
 Before an object is loaded its SHA-256 and the array layout it was compiled for are
 checked against the JSON file that names it (written after the object, which is named by

@@ -386,6 +386,11 @@ CHOICES = [
          "13.8-16.0 s (load 3.5-4.2)", "same (paired 0.983-1.008, median 1.001 over 5 runs "
          "of 6 x 40 rounds; results of 144 analyses, 50,029 events, bit for bit equal)",
          "e979b54, 54637a9"],
+        ["the shim added to the loop's module before numba optimises and compiles it, and "
+         "the object numba's JIT makes of it kept (`urmx.native._compile_with_shim`): one "
+         "code generation of the whole loop instead of two; object 133 -> 130 KB; issue 41",
+         "about -1 s", "same (paired 1.001, 0.989, 1.009; minima 1.008, 0.996, 1.011; "
+         "results bit for bit equal)", "f04b891, 4edd446"],
         ["no machine code for the helpers' numba libraries during the native compile (only "
          "their optimised IR, which the loop links in; tried, not taken)",
          "a further -1.5 to -2 s CPU", "5-14 % slower (paired 0.86-0.95: MCJIT's code "

@@ -274,7 +274,8 @@ def _compile_with_shim(dispatcher, sig, layout, loop: Loop) -> bytes | None:
 
     ll = _llvm()
     py_func = dispatcher.py_func
-    executable = cpu.CPUContext.__dict__["get_executable"]
+    own = "get_executable" in vars(cpu.CPUContext)
+    executable = cpu.CPUContext.get_executable
     libraries = []
 
     def with_shim(self, library, fndesc, env):
@@ -291,8 +292,14 @@ def _compile_with_shim(dispatcher, sig, layout, loop: Loop) -> bytes | None:
         try:
             dispatcher.compile(sig)
         finally:
-            cpu.CPUContext.get_executable = executable
-    return libraries[0]._get_compiled_object() if libraries else None
+            if own:
+                cpu.CPUContext.get_executable = executable
+            else:  # (inherited in this numba version)
+                del cpu.CPUContext.get_executable
+    try:
+        return libraries[0]._get_compiled_object() if libraries else None
+    except (RuntimeError, ValueError):  # numba kept no object: emitted from the module
+        return None
 
 
 def _shim(layout, loop: Loop, compiled) -> str:

@@ -520,3 +520,28 @@ def test_a_kernel_worker_that_dies_is_named(monkeypatch, tmp_path):
                         'sys.stdin.readline()\nraise SystemExit(5)')
     with pytest.raises(RuntimeError, match=r"worker of now ended early \(exit 5\)"):
         kernel_paired._pair({"now": tmp_path}, tmp_path / "x.npz", -1, 1, 0.01, {"now": {}})
+
+
+def test_first_compile_lines_name_both_trees_and_say_whether_the_peaks_agree():
+    """The start-up section's first-compile lines (benchmarks.compile_time): the medians
+    before and after, the compiles of each tree, the load; peaks that differ are said."""
+    from benchmarks import compile_time
+
+    run = {"wall": 0.0, "cpu": 0.0, "compiles": 0, "functions": 0, "load": 0.0}
+    d = {"before_commit": "d3f270d", "runs": 5, "load": [1.5, 3.25],
+         "before": {"wall": 24.0, "cpu": 20.0, "compiles": 93, "functions": 53},
+         "after": {"wall": 18.0, "cpu": 14.0, "compiles": 58, "functions": 53},
+         "raw": {"before": [run], "after": [run]}, "same_peaks": True}
+    assert compile_time.headline(d) == ("first compile: before 20.0 s, after 14.0 s (CPU; "
+                                        "wall 24.0 s and 18.0 s)")
+    text = "\n".join(compile_time.render(d))
+    assert "5 runs each" in text and "load average 1.5-3.2" in text
+    assert "| CPU time of the process [s] | 20.0 | 14.0 | 0.70 |" in text
+    assert "| numba compiles (functions x argument types) | 93 | 58 | |" in text
+    assert "bit for bit equal" in text
+    d["same_peaks"] = False
+    assert "**not** equal" in "\n".join(compile_time.render(d))
+    data = _startup_data(0.6, 0.6)
+    assert "first compile" not in "\n".join(startup.render(data))
+    assert "first compile: before 20.0 s" in "\n".join(startup.render({**data,
+                                                                      "first_compile": d}))

@@ -172,3 +172,50 @@ def test_the_shim_refuses_a_loop_numba_passes_otherwise():
     missing = good._replace(params=("a", "n", "flag"))
     with pytest.raises(RuntimeError, match=r"at parameter 11 \(12 parameters, 11 made\)"):
         native._shim(layout, missing, compiled)
+
+
+SHIM_SCRIPT = r"""
+import json, sys
+import numpy as np
+import urmx
+from urmx import kernel, native
+made = []
+with_shim = native._compile_with_shim
+native._compile_with_shim = lambda *args: made.append(with_shim(*args)) or made[-1]
+wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
+                 top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
+t = np.arange(1501) * 0.01
+ag = 3.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t / 4.0)
+first = kernel.run(wall, ag, 0.01, max_log=50)
+# the loop compiled again in the same process: numba has it, so the object is emitted
+# again from its optimised module (which holds the shim), a second code generation
+again = native._compile(native._FUNCTION_LAYOUT, kernel.loop.LOOP, None)
+kernel.clear_cache()
+native._FUNCTION = again
+second = kernel.run(wall, ag, 0.01, max_log=50)
+def text(res):
+    return json.dumps({k: v.tolist() if isinstance(v, np.ndarray) else v
+                       for k, v in res.items()}, sort_keys=True, default=float)
+out = {"made": [type(m).__name__ for m in made], "size": len(made[0]),
+       "same": text(first) == text(second), "events": first["events"],
+       "called": kernel.tables(wall, 0.01).args._fn is again}
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.slow
+def test_the_object_numba_makes_with_the_shim_gives_the_results_of_one_emitted_again(
+        tmp_path):
+    """The native object is what numba's JIT makes of the loop's module with the shim
+    added before optimisation (one code generation); for a loop numba had compiled before
+    in the process, the object is emitted again from its optimised module (a second code
+    generation, as every compile did before). Both give the same results bit for bit,
+    event log included."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    proc = subprocess.run([sys.executable, "-c", SHIM_SCRIPT], capture_output=True,
+                          text=True, env=env, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["made"] == ["bytes", "NoneType"]  # the first compile took numba's object
+    assert out["size"] > 10_000 and out["events"] > 10
+    assert out["same"] and out["called"]

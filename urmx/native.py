@@ -1,18 +1,18 @@
 """The kernel's integration loop as native code: compiled once by numba, loaded in ms.
 
-numba compiles the loop (:func:`urmx.kernel.loop._march`, 15 arguments, 51 arrays in all) as
-usual. A small LLVM function, ``urmx_march_native(ret, exc, iv, fv)``, is then added to
-its module: it reads the loop's arguments from two blocks (an int64 block with the address
-and shape of each array of ``urmx.kernel.loop.ARRAYS``, one slot of ``SLOT`` entries each,
-followed by the integer arguments; a float64 block with the real ones), passes them as
-numba passes arguments (an array as meminfo, parent, size, item size, data, shape and
-strides) and calls the loop. The module (the loop as numba optimised it, untouched) and
-the shim are compiled to an object file, which refers to no symbol outside itself, and
-written into urmx's cache folder (:mod:`urmx.jitcache`: keyed on the compiled sources and
-the numba, llvmlite and Python versions; here also on the CPU, since the code uses this
-CPU's instruction set). Every process, the compiling one included, loads that object with
-llvmlite's MCJIT (a few ms) and calls the shim through ctypes: a warm process never
-imports numba, whose import and cache loading cost about 0.8 s a process.
+numba compiles the loop (:func:`urmx.kernel.loop._march`, 15 arguments, 51 arrays in all)
+as usual. A small LLVM function, ``urmx_march_native(ret, exc, iv, fv)``, is added to its
+module before numba optimises it: it reads the loop's arguments from two blocks (an int64
+block with the address and shape of each array of ``urmx.kernel.loop.ARRAYS``, one slot of
+``SLOT`` entries each, followed by the integer arguments; a float64 block with the real
+ones), passes them as numba passes arguments (an array as meminfo, parent, size, item size,
+data, shape and strides) and calls the loop. The object file numba's JIT makes of that
+module (the loop and the shim, compiled once), which refers to no symbol outside itself, is
+kept and written into urmx's cache folder (:mod:`urmx.jitcache`: keyed on the compiled
+sources and the numba, llvmlite and Python versions; here also on the CPU, since the code
+uses this CPU's instruction set). Every process, the compiling one included, loads that
+object with llvmlite's MCJIT (a few ms) and calls the shim through ctypes: a warm process
+never imports numba, whose import and cache loading cost about 0.8 s a process.
 
 Before an object is loaded its SHA-256 and the array layout it was compiled for are
 checked against the JSON file that names it (written after the object, which is named by
@@ -240,14 +240,15 @@ def _compile(layout, loop: Loop, meta_path: Path | None):
             arrays[p] if p in arrays else scalar[p])
 
     sig = tuple(numba_type(p) for p in loop.params)
-    dispatcher.compile(sig)
-    cres = dispatcher.overloads[sig]
-    library = cres.library
-    ll = _llvm()
-    module = ll.parse_assembly(str(library._final_module))
-    module.link_in(ll.parse_assembly(_shim(layout, loop, module.get_function(
-        cres.fndesc.mangled_name))))
-    data = library._codegen._tm.emit_object(module)
+    data = _compile_with_shim(dispatcher, sig, layout, loop)
+    if data is None:  # compiled before in this process: emitted from its optimised module
+        cres = dispatcher.overloads[sig]
+        ll = _llvm()
+        module = ll.parse_assembly(str(cres.library._final_module))
+        if not any(f.name == SYMBOL and not f.is_declaration for f in module.functions):
+            module.link_in(ll.parse_assembly(_shim(layout, loop, module.get_function(
+                cres.fndesc.mangled_name))))
+        data = cres.library._codegen._tm.emit_object(module)
     fn = _engine(data, SYMBOL)
     if meta_path is not None:
         try:
@@ -257,6 +258,48 @@ def _compile(layout, loop: Loop, meta_path: Path | None):
                              "new process will compile it\n")
     sys.stderr.write(f"urmx: kernel compiled in {time.perf_counter() - started:.1f} s\n")
     return fn
+
+
+def _compile_with_shim(dispatcher, sig, layout, loop: Loop) -> bytes | None:
+    """numba compiles the loop for `sig` with the shim in its module, and the object code
+    numba's JIT makes of that module is the native object (None if the loop had been
+    compiled for `sig` before in this process).
+
+    The shim is added to the loop's library when numba asks for the loop's machine code,
+    so it is optimised and compiled with the loop, once: emitting the object again from
+    the module numba had compiled (as before) cost a second code generation of the whole
+    loop (about 1 s) and gave code of the same speed (paired 1.00)."""
+    from numba.core import cpu
+    from numba.core.compiler_lock import global_compiler_lock
+
+    ll = _llvm()
+    py_func = dispatcher.py_func
+    own = "get_executable" in vars(cpu.CPUContext)
+    executable = cpu.CPUContext.get_executable
+    libraries = []
+
+    def with_shim(self, library, fndesc, env):
+        if (not libraries and not library._finalized and fndesc.qualname ==
+                py_func.__qualname__ and fndesc.modname == py_func.__module__):
+            compiled = library._final_module.get_function(fndesc.mangled_name)
+            library.add_llvm_module(ll.parse_assembly(_shim(layout, loop, compiled)))
+            library.enable_object_caching()  # numba's JIT hands over the object it makes
+            libraries.append(library)
+        return executable(self, library, fndesc, env)
+
+    with global_compiler_lock:  # (no other thread compiles while the hook is in place)
+        cpu.CPUContext.get_executable = with_shim
+        try:
+            dispatcher.compile(sig)
+        finally:
+            if own:
+                cpu.CPUContext.get_executable = executable
+            else:  # (inherited in this numba version)
+                del cpu.CPUContext.get_executable
+    try:
+        return libraries[0]._get_compiled_object() if libraries else None
+    except (RuntimeError, ValueError):  # numba kept no object: emitted from the module
+        return None
 
 
 def _shim(layout, loop: Loop, compiled) -> str:

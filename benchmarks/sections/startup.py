@@ -23,6 +23,7 @@ from pathlib import Path
 from urmx.config import project_root
 from urmx.markdown import table
 
+from .. import compile_time
 from ..common import export_commit
 
 IN_ALL = False
@@ -202,7 +203,9 @@ def run(quick: bool, echo=print) -> dict:
         "main": min(x["min"] for x in last["steady"]) / min(x["min"] for x in now["steady"]),
         "main_rounds": _rounds(now["steady"], last["steady"]),
     }
-    echo(f"startup: ratios {out['ratios']}, reference {out['reference']['speedup']:.0f}x")
+    out["first_compile"] = compile_time.run(quick, echo)  # before and after issue 41's work
+    echo(f"startup: ratios {out['ratios']}, reference {out['reference']['speedup']:.0f}x; "
+         f"{compile_time.headline(out['first_compile'])}")
     return out
 
 
@@ -293,6 +296,7 @@ def render(d: dict) -> list[str]:
         ]
     return [
         *lines,
+        *(compile_time.render(d["first_compile"]) if "first_compile" in d else []),
         f"The benchmark analysis takes {1e3 * ref['kernel']:.3f} ms against "
         f"{ref['reference']:.2f} s for the scipy reference at rtol 1e-8: "
         f"{ref['speedup']:.0f}x.",
@@ -376,6 +380,25 @@ CHOICES = [
         ["the tracker, propagator and event-row helpers on padded loops only (one copy "
          "each instead of an n = 2 and a padded one: 119 KB of object code against 122 KB; "
          "tried, not taken)", "17 s", "8 % slower (paired 0.921, minima 0.926)", "-"],
+        ["helpers (no Python wrapper) compiled once per argument types instead of once per "
+         "literal constant they are called with (`urmx.jitcache`: 93 numba compiles of 53 "
+         "functions -> 58; loop object 152 -> 133 KB); issue 41", "CPU 19.5-20.9 -> "
+         "13.8-16.0 s (load 3.5-4.2)", "same (paired 0.983-1.008, median 1.001 over 5 runs "
+         "of 6 x 40 rounds; results of 144 analyses, 50,029 events, bit for bit equal)",
+         "e979b54, 54637a9"],
+        ["the shim added to the loop's module before numba optimises and compiles it, and "
+         "the object numba's JIT makes of it kept (`urmx.native._compile_with_shim`): one "
+         "code generation of the whole loop instead of two; object 133 -> 130 KB; issue 41",
+         "about -1 s", "same (paired 1.001, 0.989, 1.009; minima 1.008, 0.996, 1.011; "
+         "results bit for bit equal)", "f04b891, 4edd446"],
+        ["no machine code for the helpers' numba libraries during the native compile (only "
+         "their optimised IR, which the loop links in; tried, not taken)",
+         "a further -1.5 to -2 s CPU", "5-14 % slower (paired 0.86-0.95: MCJIT's code "
+         "generation rewrites a library's IR in place before its callers link it in, and "
+         "the loop was optimised from the other IR)", "-"],
+        ["no module-level optimisation of a forceinline helper's own library (its IR is "
+         "optimised again once inlined; tried, not taken)", "about -1 s CPU",
+         "paired 0.973 and 0.986, minima 1.004-1.006", "-"],
     ]),
     "",
     "Where the steady state lost on a busy host. Before the event path was inlined (at "

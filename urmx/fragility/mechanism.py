@@ -14,6 +14,7 @@ top support's own period (:func:`diaphragm_period`) measures.
 
 from __future__ import annotations
 
+import functools
 import math
 
 from ..errors import InputError, got
@@ -88,6 +89,13 @@ def rocking_period(wall: Wall) -> float:
         resistances, MODEL.md section 3). [s]
     """
     wall_argument("rocking_period", wall)
+    return _rocking_period(wall)
+
+
+@functools.lru_cache(maxsize=4096)
+def _rocking_period(wall: Wall) -> float:
+    """:func:`rocking_period` of a checked wall, kept per wall (a study asks for each
+    wall's once per cell: walls are immutable and hashable)."""
     inertia, _, restoring, theta_ins, _ = pinned_mechanism(wall)
     theta_d = DESIGN_FRACTION * theta_ins
     return 2.0 * math.pi * math.sqrt(inertia * theta_d / restoring(theta_d))
@@ -106,6 +114,13 @@ def static_acceleration(wall: Wall) -> float:
         The wall and its supports.
     """
     wall_argument("static_acceleration", wall)
+    return _static_acceleration(wall)
+
+
+@functools.lru_cache(maxsize=4096)
+def _static_acceleration(wall: Wall) -> float:
+    """:func:`static_acceleration` of a checked wall, kept per wall (a warm-started IDA
+    asks for two walls' at every cell)."""
     _, coupling, restoring, theta_ins, pinned = pinned_mechanism(wall)
     k = pinned.a1 / pinned.a2
     lower, upper = pinned.segment(2), pinned.segment(1)

@@ -510,6 +510,11 @@ def test_profile_rows_name_the_module_path():
 
     assert kernel.where(urmx_kernel.__file__) == "urmx/kernel/__init__.py"
     assert kernel.where(np.__file__) == "__init__.py"
+    # a package installed in a virtual environment inside the checkout (CI's .venv-ci)
+    from urmx.config import project_root
+
+    venv = project_root() / ".venv-ci/lib/python3.11/site-packages/numpy/__init__.py"
+    assert kernel.where(str(venv)) == "__init__.py"
 
 
 def test_a_kernel_worker_that_dies_is_named(monkeypatch, tmp_path):

@@ -126,13 +126,15 @@ def profile(wall: Wall, ag: np.ndarray, dt: float, n: int = 100, **kw: Any) -> d
 
 def where(file: str) -> str:
     """A profiled function's file as the report names it: its path in the checkout for
-    the project's own modules (``urmx/kernel/__init__.py``), else its name."""
+    the project's own modules (``urmx/kernel/__init__.py``), else its name (also for an
+    installed package in a virtual environment inside the checkout, as CI's)."""
     from urmx.config import project_root
 
     try:
-        return Path(file).resolve().relative_to(project_root().resolve()).as_posix()
+        rel = Path(file).resolve().relative_to(project_root().resolve())
     except ValueError:  # (numpy, builtins: "~")
         return Path(file).name
+    return Path(file).name if "site-packages" in rel.parts else rel.as_posix()
 
 
 def _error_word(k: dict) -> str:

@@ -9,6 +9,7 @@ measure the same way.
 from __future__ import annotations
 
 import datetime as _dt
+import json
 import math
 import os
 import platform
@@ -59,6 +60,25 @@ def export_commit(commit: str, where: Path, paths: tuple[str, ...] = ()) -> Path
                                  check=True, capture_output=True).stdout
         subprocess.run(["tar", "-x", "-C", str(where)], input=archive, check=True)
     return where
+
+
+# ---- long-lived worker processes ---------------------------------------------------------
+
+def ask(proc: subprocess.Popen, who: str, line: str) -> dict:
+    """Send one request line to a worker process (none when `line` is empty) and read its
+    one-line JSON answer; a worker that has ended, before the request (the write meets a
+    closed pipe) or during it (no answer), is named as `who` with its exit status (its
+    traceback is on stderr)."""
+    try:
+        if line:
+            proc.stdin.write(line + "\n")
+            proc.stdin.flush()
+        answer = proc.stdout.readline()
+    except BrokenPipeError:
+        answer = ""
+    if not answer:
+        raise RuntimeError(f"the {who} ended early (exit {proc.wait(timeout=60)})")
+    return json.loads(answer)
 
 
 # ---- walls and records ------------------------------------------------------------------

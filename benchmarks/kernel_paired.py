@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import export_commit
+from .common import ask, export_commit
 
 BASELINE_COMMIT = "834f656"  # main before issue 41
 NOW, BASE = "now", BASELINE_COMMIT
@@ -194,19 +194,8 @@ for line in sys.stdin:
 
 
 def _ask(proc: subprocess.Popen, tree: str, line: str) -> dict:
-    """Send one request to a worker, read its one-line JSON answer; a worker that has
-    ended is named with its exit status (its traceback is on stderr)."""
-    try:
-        if line:
-            proc.stdin.write(line + "\n")
-            proc.stdin.flush()
-        answer = proc.stdout.readline()
-    except BrokenPipeError:
-        answer = ""
-    if not answer:
-        raise RuntimeError(f"the kernel worker of {tree} ended early "
-                           f"(exit {proc.wait(timeout=60)})")
-    return json.loads(answer)
+    """One request to the kernel worker of `tree` (`benchmarks.common.ask`)."""
+    return ask(proc, f"kernel worker of {tree}", line)
 
 
 def _pair(trees: dict, inputs: Path, core: int, rounds: int, block: float,

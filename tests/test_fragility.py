@@ -966,25 +966,20 @@ def test_a_study_extended_by_a_wall_reuses_the_chain_before_it(ida_records, make
 
     fresh = _capacities(st.run_study(make_study(CHAIN_IDA, "fresh.toml"),
                                      kernel=study_kernel, progress=False, scheduler="serial"))
-    out = tmp_path / "grow.nc"
-    two = CHAIN_IDA.replace('walls = ["s08", "s12", "s18"]', 'walls = ["s08", "s12"]')
-    st.run_study(make_study(two, "grow.toml"), out=out, kernel=study_kernel,
-                 progress=False, scheduler="serial")
-    ds = st.run_study(make_study(CHAIN_IDA, "grow.toml"), out=out, kernel=study_kernel,
-                      progress=False, scheduler="serial")
-    run = engine.last_run()
-    assert (run.from_archive, run.computed) == (16, 8)
-    assert _capacities(ds) == fresh
-    out = tmp_path / "insert.nc"
-    ends = CHAIN_IDA.replace('walls = ["s08", "s12", "s18"]', 'walls = ["s08", "s18"]')
-    st.run_study(make_study(ends, "insert.toml"), out=out, kernel=study_kernel,
-                 progress=False, scheduler="serial")
-    ds = st.run_study(make_study(CHAIN_IDA, "insert.toml"), out=out, kernel=study_kernel,
-                      progress=False, scheduler="serial")
-    run = engine.last_run()
-    assert (run.from_archive, run.computed) == (8, 16)
-    assert _capacities(ds) == fresh
+    def rerun(walls: str, name: str):
+        """The study with only `walls` into an archive, then the whole study into it: the
+        archive and the cells of the second run (taken over, computed)."""
+        out = tmp_path / f"{name}.nc"
+        first = CHAIN_IDA.replace('walls = ["s08", "s12", "s18"]', f"walls = {walls}")
+        st.run_study(make_study(first, f"{name}.toml"), out=out, kernel=study_kernel,
+                     progress=False, scheduler="serial")
+        ds = st.run_study(make_study(CHAIN_IDA, f"{name}.toml"), out=out,
+                          kernel=study_kernel, progress=False, scheduler="serial")
+        run = engine.last_run()
+        return _capacities(ds), (run.from_archive, run.computed)
 
+    assert rerun('["s08", "s12"]', "grow") == (fresh, (16, 8))
+    assert rerun('["s08", "s18"]', "insert") == (fresh, (8, 16))
 
 def test_capacities_are_the_same_bit_for_bit_with_the_capacity_tracking(library):
     """`collapse_capacity` and the IDA kind run the kernel with ``track="capacity"`` (only

@@ -60,14 +60,15 @@ def _load() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
 
 
-def _small_study(tmp: Path) -> Path:
-    path = tmp / "quick-ida.toml"
-    path.write_text("""
+def _ida_study(path: Path, name: str, walls: str, diaphragms: str, extra: str = "") -> Path:
+    """Write a small IDA study over four FEMA P695 records at the catalog study's search
+    settings (walls and diaphragms as TOML values, `extra` more [study] lines)."""
+    path.write_text(f"""
 [study]
-name = "quick-ida"
-walls = ["s08", "s16", "s24"]
-diaphragms = ["D1", "D5", "D2/both"]
-records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
+name = "{name}"
+walls = {walls}
+diaphragms = {diaphragms}
+{extra}records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
 cor = [0.8]
 [study.ida]
 im = "pga"
@@ -75,6 +76,11 @@ rtol = 1e-3
 step = 1.05
 """)
     return path
+
+
+def _small_study(tmp: Path) -> Path:
+    return _ida_study(tmp / "quick-ida.toml", "quick-ida", '["s08", "s16", "s24"]',
+                      '["D1", "D5", "D2/both"]')
 
 
 def _cluster(n: int):
@@ -270,21 +276,8 @@ print(json.dumps({"seconds": time.perf_counter() - t, "code": code}))
 
 def _quick_ida(tmp: Path) -> Path:
     """The end-to-end study of ``--quick``: the 9 walls on 2 diaphragms over 4 records."""
-    path = tmp / "quick-e2e.toml"
-    path.write_text("""
-[study]
-name = "quick-e2e"
-walls = "parametric"
-diaphragms = ["D2", "D3/both"]
-supports = "top"
-records = ["p695-01-mul009", "p695-09-dzc270", "p695-12-clwln", "p695-18-rio270"]
-cor = [0.8]
-[study.ida]
-im = "pga"
-rtol = 1e-3
-step = 1.05
-""")
-    return path
+    return _ida_study(tmp / "quick-e2e.toml", "quick-e2e", '"parametric"',
+                      '["D2", "D3/both"]', 'supports = "top"\n')
 
 
 def end_to_end(quick: bool, echo=print) -> dict:

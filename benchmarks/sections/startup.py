@@ -24,7 +24,7 @@ from urmx.config import project_root
 from urmx.markdown import table
 
 from .. import compile_time
-from ..common import export_commit
+from ..common import ask, export_commit
 
 IN_ALL = False
 BASELINE_COMMIT = "0615fbe"  # the kernel before the held joints and the start-up work
@@ -79,19 +79,9 @@ BLOCK, ROUNDS, PAIRS = 20, 40, 6
 
 def _block(proc: subprocess.Popen, name: str, n: int) -> dict:
     """One block of n analyses from the steady-state process of kernel `name`: its
-    {"min", "median"}. A process that has ended, before the request (the write meets a
-    closed pipe) or during the block (no answer), is named with its exit status (its
-    traceback is on stderr)."""
-    try:
-        proc.stdin.write(f"{n}\n")
-        proc.stdin.flush()
-        line = proc.stdout.readline()
-    except BrokenPipeError:
-        line = ""
-    if not line:
-        raise RuntimeError(f"the steady-state process of {name} ended early "
-                           f"(exit {proc.wait(timeout=60)})")
-    return json.loads(line)
+    {"min", "median"} (`benchmarks.common.ask`: a process that has ended is named with its
+    exit status)."""
+    return ask(proc, f"steady-state process of {name}", str(n))
 
 
 def _steady(trees: dict, record: str, quick: bool, echo) -> dict:

@@ -269,7 +269,7 @@ def _compile_with_shim(dispatcher, sig, layout, loop: Loop) -> bytes | None:
     so it is optimised and compiled with the loop, once: emitting the object again from
     the module numba had compiled (as before) cost a second code generation of the whole
     loop (about 1 s) and gave code of the same speed (paired 1.00)."""
-    from numba.core import cpu
+    from numba.core import config, cpu
     from numba.core.compiler_lock import global_compiler_lock
 
     ll = _llvm()
@@ -289,9 +289,12 @@ def _compile_with_shim(dispatcher, sig, layout, loop: Loop) -> bytes | None:
 
     with global_compiler_lock:  # (no other thread compiles while the hook is in place)
         cpu.CPUContext.get_executable = with_shim
+        slp = config.SLP_VECTORIZE
+        config.SLP_VECTORIZE = 1
         try:
             dispatcher.compile(sig)
         finally:
+            config.SLP_VECTORIZE = slp
             if own:
                 cpu.CPUContext.get_executable = executable
             else:  # (inherited in this numba version)

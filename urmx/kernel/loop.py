@@ -1338,6 +1338,175 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
     return m_taylor
 
 
+# ---- runs of plain sub-steps ----------------------------------------------------------
+
+def _plain_source(nn: int, t_lo: int, t_hi: int) -> str:
+    """Source of a loop over whole record steps on which nothing happens: one sub-step a
+    step (``nsub == 1``), no function near zero, no release function, the KE event
+    functions of a piece without a held joint. Its state (coordinates, event functions,
+    trackers t_lo .. t_hi - 1 and their peaks) lives in locals, where the compiler keeps it
+    in registers or on the stack: the general loop's arrays, which it cannot prove apart,
+    are reloaded after every store. Each value is computed by the very operations of the
+    general loop (:func:`_propagate_n`, :func:`_events_at_n`, :func:`_may_fire_k`,
+    :func:`_point_n`, :func:`_peaks_over` with ``s_end = 1``), so a step gives the same bits
+    either way. A step on which an event function may fire or an interior extremum needs
+    the series is left undone: the general loop takes it from the state written back.
+    Generated per number of coordinates and tracker range (constants of the text: the
+    loops over coordinates, functions and trackers unrolled into named locals)."""
+    co = range(nn)
+    ks = range(KE)
+    ts = range(t_lo, t_hi)
+    acc = [t for t in ts if t >= N_DISP]
+    L = []
+
+    def put(indent, line):
+        L.append("    " * indent + line)
+
+    put(0, f"def _plain_{nn}_{t_lo}_{t_hi}(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, "
+           "fam1_time, E, PV, RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, "
+           "der_a, peaks):")
+    for i in co:
+        put(1, f"r{i} = r[{i}]")
+        put(1, f"v{i} = v[{i}]")
+    for k in ks:
+        put(1, f"e{k} = e_a[{k}]")
+        put(1, f"ed{k} = ed_a[{k}]")
+    for t in ts:
+        put(1, f"p{t} = val_a[{t}]")
+        put(1, f"d{t} = der_a[{t}]")
+        put(1, f"pk{t} = peaks[{t}]")
+    for t in acc:
+        put(1, f"c{t} = 1.0 - _rowdot(TR, {t}, MG)")
+    put(1, "H = dt - 0.0")  # tb - tau of the general loop
+    put(1, "Hs = 1.0 * H")
+    put(1, "n_plain = 0")
+    put(1, "while step < nsteps and step != N - 2:")
+    put(2, "if step < N - 1:")
+    put(3, "alpha = ag[step]")
+    put(3, "beta = (ag[step + 1] - ag[step]) * inv_dt")
+    put(2, "else:")
+    put(3, "alpha = 0.0")
+    put(3, "beta = 0.0")
+    for t in ts:
+        put(2, f"dn{t} = d{t}")
+    if acc:
+        put(2, "if step > 0:")
+        put(3, "dbeta = beta - beta_prev")
+        for t in acc:
+            put(3, f"dn{t} = d{t} + dbeta * c{t}")
+    put(2, "a0 = alpha + beta * 0.0")
+    # the exact propagator (_propagate_n)
+    for i in co:
+        for s, row in (("rb", i), ("vb", NP + i)):
+            put(2, f"{s}{i} = PV[0, {row}] + a0 * PV[1, {row}] + beta * PV[2, {row}]")
+        terms = [(f"E[{i}, {j}] * r{j}", f"E[{NP + i}, {j}] * r{j}") for j in co] + \
+            [(f"E[{i}, {NP + j}] * v{j}", f"E[{NP + i}, {NP + j}] * v{j}") for j in co]
+        for a, b in terms:
+            put(2, f"rb{i} += {a}")
+            put(2, f"vb{i} += {b}")
+    # the event functions at the end (_events_at_n) and the may-fire test (_may_fire_k)
+    for k in ks:
+        a = " + ".join(f"RT[{i}, {k}] * rb{i}" for i in range(2))
+        b = " + ".join(f"RT[{i}, {k}] * vb{i}" for i in range(2))
+        put(2, f"x = {a}")
+        put(2, f"y = {b}")
+        if nn > 2:
+            put(2, f"x += RT[2, {k}] * rb2")
+            put(2, f"y += RT[2, {k}] * vb2")
+        put(2, f"eb{k} = x + KP[{k}]")
+        put(2, f"edb{k} = y")
+    # (no opening function is live here: OPN[k] * e > 0 is false; the tests are the same
+    # comparisons as _may_fire_k's, branching: on a plain step none holds)
+    put(2, "if " + " or ".join(f"eb{k} <= 0.0" for k in ks) + ":")
+    put(3, "break")
+    for k in ks:
+        put(2, f"if ed{k} < 0.0 and edb{k} > 0.0 and min(e{k}, eb{k}) - (4.0 / 27.0) * H * "
+               f"(edb{k} - ed{k}) < 0.25 * max(e{k}, eb{k}):")
+        put(3, "break")
+    # the trackers at the end (_point_n at a_end = alpha + beta * tb)
+    put(2, "ag_b = alpha + beta * dt")
+    if acc:
+        for i in co:
+            x = " - ".join([f"-MR[{i}] - MG[{i}] * ag_b"]
+                           + [f"(MK[{i}, {j}] * rb{j} + MC[{i}, {j}] * vb{j})"
+                              for j in range(2 if i < 2 else 3)])
+            put(2, f"aa{i} = {x}")
+        if nn > 2:
+            for i in range(2):
+                put(2, f"aa{i} -= MK[{i}, 2] * rb2 + MC[{i}, 2] * vb2")
+        for i in co:
+            x = " - ".join([f"-MG[{i}] * beta"]
+                           + [f"(MK[{i}, {j}] * vb{j} + MC[{i}, {j}] * aa{j})"
+                              for j in range(2 if i < 2 else 3)])
+            put(2, f"jj{i} = {x}")
+        if nn > 2:
+            for i in range(2):
+                put(2, f"jj{i} -= MK[{i}, 2] * vb2 + MC[{i}, 2] * aa2")
+    for t in ts:
+        p, q = ("rb", "vb") if t < N_DISP else ("aa", "jj")
+        put(2, f"x = TR[{t}, 0] * {p}0 + TR[{t}, 1] * {p}1")
+        put(2, f"y = TR[{t}, 0] * {q}0 + TR[{t}, 1] * {q}1")
+        if nn > 2:
+            put(2, f"x += TR[{t}, 2] * {p}2")
+            put(2, f"y += TR[{t}, 2] * {q}2")
+        if t < N_DISP:
+            put(2, f"pb{t} = x")
+            put(2, f"db{t} = y")
+        else:
+            put(2, f"pb{t} = x + ag_b")
+            put(2, f"db{t} = y + beta")
+    # the peaks over the step (_peaks_over with s_end = 1)
+    put(2, "closer = False")
+    for t in ts:
+        put(2, f"u = abs(pb{t})")
+        put(2, f"if u > pk{t}:")
+        put(3, f"pk{t} = u")
+        # (_peaks_over's two tests, both evaluated and combined: one rarely taken branch)
+        put(2, f"bound = max(u, abs(p{t})) + (4.0 / 27.0) * Hs * (abs(dn{t}) + abs(db{t}))")
+        put(2, f"if (not dn{t} * db{t} >= 0.0) & (not bound * (1.0 + 1e-12) < "
+               f"pk{t} * (1.0 - GATE)):")
+        put(3, f"lo, hi, slo, shi = _hermite_ext(p{t}, pb{t}, dn{t} * Hs, db{t} * Hs)")
+        put(3, "est = max(abs(lo) if lo != np.inf else 0.0, abs(hi) if hi != -np.inf "
+               "else 0.0)")
+        put(3, f"if not est < pk{t} * (1.0 - GATE):")
+        put(4, "closer = True")
+    put(2, "if closer:")
+    put(3, "break")
+    # the step is done: its end is the next one's start
+    put(2, "n_plain += 1")
+    put(2, "if fam1:")
+    put(3, "fam1_time += 1.0 * H")
+    for i in co:
+        put(2, f"r{i} = rb{i}")
+        put(2, f"v{i} = vb{i}")
+    for k in ks:
+        put(2, f"e{k} = eb{k}")
+        put(2, f"ed{k} = edb{k}")
+    for t in ts:
+        put(2, f"p{t} = pb{t}")
+        put(2, f"d{t} = db{t}")
+    put(2, "beta_prev = beta")
+    put(2, "step += 1")
+    for i in co:
+        put(1, f"r[{i}] = r{i}")
+        put(1, f"v[{i}] = v{i}")
+    for k in ks:
+        put(1, f"e_a[{k}] = e{k}")
+        put(1, f"ed_a[{k}] = ed{k}")
+    for t in ts:
+        put(1, f"val_a[{t}] = p{t}")
+        put(1, f"der_a[{t}] = d{t}")
+        put(1, f"peaks[{t}] = pk{t}")
+    put(1, "return step, n_plain, fam1_time, beta_prev")
+    return "\n".join(L) + "\n"
+
+
+for _nn in (2, NP):
+    for _lo, _hi in ((0, N_TRACK), (TR_D1F1, TR_D2 + 1)):
+        exec(_plain_source(_nn, _lo, _hi), globals())
+        globals()[f"_plain_{_nn}_{_lo}_{_hi}"] = inline(globals()[f"_plain_{_nn}_{_lo}_{_hi}"])
+
+
 @inner
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
     """One row of the histories: tilts, displacements, accelerations, pattern and the
@@ -1443,7 +1612,31 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
     near = 0  # bit k: event function k may have just left zero (set at events)
     ev_here = 0  # events in the current span of EVENT_SPAN seconds, which ends at span_end
     span_end = -1.0
-    for step in range(nsteps):
+    step = 0
+    while step < nsteps:
+        if nsub[mid] == 1 and near == 0 and not rel and ke == KE and not want_hist:
+            # a run of plain steps, state in locals (until something may happen)
+            fam1 = ist[I_FAM] == 1
+            if n == 2:
+                if capacity:
+                    step, n_plain, fam1_time, beta_prev = _plain_2_3_6(
+                        ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
+                        RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
+                else:
+                    step, n_plain, fam1_time, beta_prev = _plain_2_0_9(
+                        ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
+                        RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
+            elif capacity:
+                step, n_plain, fam1_time, beta_prev = _plain_3_3_6(
+                    ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
+                    RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
+            else:
+                step, n_plain, fam1_time, beta_prev = _plain_3_0_9(
+                    ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
+                    RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
+            n_sub += n_plain
+            if step >= nsteps:
+                break
         if step < N - 1:
             alpha = ag[step]
             beta = (ag[step + 1] - ag[step]) * inv_dt
@@ -1690,6 +1883,7 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
             a_grid = ag[step + 1] if step + 1 < N else 0.0
             _point(MK, MC, MR, MG, TR, r, v, a_grid, 0.0, val_b, der_b, sacc, sjerk)
             record_row(hist, step + 1, L, GN[h], ist, r, v, val_b, nfull)
+        step += 1
     outs[O_FAM1_TIME] = fam1_time
     outs[O_DURATION] = duration
     outs[O_BASE_IMP] = counts[0]

@@ -1213,8 +1213,10 @@ def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
     """The event functions of a piece as signed rows stored by column (RT[i, k] =
     sig[k]*rows[k, i]), offsets KP and opening flags OPN, padded to MAX_EV with inert
     functions (e = 1, rate 0) so that all are evaluated in fixed-length loops. Returns
-    whether a release function (with rate and ground terms) is among them."""
+    whether a release function (with rate and ground terms) is among them, and whether an
+    opening function is (a closed joint: no step is plain)."""
     rel = False
+    opens = False
     for k in range(MAX_EV):
         live = k < ne
         for i in range(NP):
@@ -1226,7 +1228,9 @@ def _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN):
             else 0.0
         if live and (kind[k] == EV_BASE_RELEASE or kind[k] == EV_CRACK_RELEASE):
             rel = True
-    return rel
+        if OPN[k] != 0.0:
+            opens = True
+    return rel, opens
 
 
 @inline
@@ -1338,48 +1342,53 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
     return m_taylor
 
 
-# ---- runs of plain sub-steps ----------------------------------------------------------
+# ---- runs of plain steps (capacity tracking) --------------------------------------------
 
-def _plain_source(nn: int, t_lo: int, t_hi: int) -> str:
-    """Source of a loop over whole record steps on which nothing happens: one sub-step a
-    step (``nsub == 1``), no function near zero, no release function, the KE event
-    functions of a piece without a held joint. Its state (coordinates, event functions,
-    trackers t_lo .. t_hi - 1 and their peaks) lives in locals, where the compiler keeps it
-    in registers or on the stack: the general loop's arrays, which it cannot prove apart,
-    are reloaded after every store. Each value is computed by the very operations of the
-    general loop (:func:`_propagate_n`, :func:`_events_at_n`, :func:`_may_fire_k`,
-    :func:`_point_n`, :func:`_peaks_over` with ``s_end = 1``), so a step gives the same bits
-    either way. A step on which an event function may fire or an interior extremum needs
-    the series is left undone: the general loop takes it from the state written back.
-    Generated per number of coordinates and tracker range (constants of the text: the
-    loops over coordinates, functions and trackers unrolled into named locals)."""
+def _plain_source(nn: int, trackers: tuple) -> str:
+    """Source of the loop that a capacity search's analysis (``track="capacity"``) runs over
+    whole record steps on which nothing happens: one sub-step a step (``nsub == 1``), no
+    function near zero, no release or opening function, the KE event functions. Its state
+    (coordinates, event functions, the displacement-type trackers given and their peaks)
+    lives in locals, which the compiler keeps in registers or on the stack, where the
+    general loop keeps it in arrays that it cannot prove apart and reloads after every
+    store; and it is optimised with LLVM's SLP vectorizer (``native.Loop.vectorize``),
+    which packs the independent rows of the propagator and of the event functions (the
+    order of each sum unchanged). Every value is computed by the operations of the general
+    loop (:func:`_propagate_n`, :func:`_events_at_n`, :func:`_may_fire_k`,
+    :func:`_point_n`, :func:`_peaks_over` with ``s_end = 1``) in their order, so a step
+    gives the same bits either way. A step on which an event function may fire or an
+    interior extremum needs the series is handed over undone: the general loop takes it
+    from the end state and event functions written to rb, vb, e_b and ed_b.
+
+    Generated per number of coordinates (the loops over coordinates, functions and
+    trackers unrolled into named locals). The benchmark analysis, tracking all 9 outputs
+    with a few steps between events, ran 0.93x as fast with such a loop (and 0.96x with one
+    in the code, unused: the loop's own code grew), so full tracking keeps the general
+    loop."""
+    assert all(t < N_DISP for t in trackers)  # (no ground or jerk terms)
     co = range(nn)
     ks = range(KE)
-    ts = range(t_lo, t_hi)
-    acc = [t for t in ts if t >= N_DISP]
-    L = []
+    lines = []
 
     def put(indent, line):
-        L.append("    " * indent + line)
+        lines.append("    " * indent + line)
 
-    put(0, f"def _plain_{nn}_{t_lo}_{t_hi}(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, "
-           "fam1_time, E, PV, RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, "
-           "der_a, peaks):")
+    put(0, f"def _plain_{nn}(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, "
+           "PV, RT, KP, TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b):")
     for i in co:
         put(1, f"r{i} = r[{i}]")
         put(1, f"v{i} = v[{i}]")
     for k in ks:
         put(1, f"e{k} = e_a[{k}]")
         put(1, f"ed{k} = ed_a[{k}]")
-    for t in ts:
+    for t in trackers:
         put(1, f"p{t} = val_a[{t}]")
         put(1, f"d{t} = der_a[{t}]")
         put(1, f"pk{t} = peaks[{t}]")
-    for t in acc:
-        put(1, f"c{t} = 1.0 - _rowdot(TR, {t}, MG)")
-    put(1, "H = dt - 0.0")  # tb - tau of the general loop
+    put(1, "H = dt - 0.0")  # tb - tau of the general loop, and s_end * H
     put(1, "Hs = 1.0 * H")
     put(1, "n_plain = 0")
+    put(1, "handed = False")
     put(1, "while step < nsteps and step != N - 2:")
     put(2, "if step < N - 1:")
     put(3, "alpha = ag[step]")
@@ -1387,90 +1396,58 @@ def _plain_source(nn: int, t_lo: int, t_hi: int) -> str:
     put(2, "else:")
     put(3, "alpha = 0.0")
     put(3, "beta = 0.0")
-    for t in ts:
-        put(2, f"dn{t} = d{t}")
-    if acc:
-        put(2, "if step > 0:")
-        put(3, "dbeta = beta - beta_prev")
-        for t in acc:
-            put(3, f"dn{t} = d{t} + dbeta * c{t}")
     put(2, "a0 = alpha + beta * 0.0")
     # the exact propagator (_propagate_n)
     for i in co:
-        for s, row in (("rb", i), ("vb", NP + i)):
-            put(2, f"{s}{i} = PV[0, {row}] + a0 * PV[1, {row}] + beta * PV[2, {row}]")
-        terms = [(f"E[{i}, {j}] * r{j}", f"E[{NP + i}, {j}] * r{j}") for j in co] + \
-            [(f"E[{i}, {NP + j}] * v{j}", f"E[{NP + i}, {NP + j}] * v{j}") for j in co]
-        for a, b in terms:
-            put(2, f"rb{i} += {a}")
-            put(2, f"vb{i} += {b}")
-    # the event functions at the end (_events_at_n) and the may-fire test (_may_fire_k)
+        for x, row in (("rb", i), ("vb", NP + i)):
+            put(2, f"{x}{i} = PV[0, {row}] + a0 * PV[1, {row}] + beta * PV[2, {row}]")
+        for c, j in [("r", j) for j in co] + [("v", j) for j in co]:
+            col = j if c == "r" else NP + j
+            put(2, f"rb{i} += E[{i}, {col}] * {c}{j}")
+            put(2, f"vb{i} += E[{NP + i}, {col}] * {c}{j}")
+    # the event functions at the end (_events_at_n)
     for k in ks:
-        a = " + ".join(f"RT[{i}, {k}] * rb{i}" for i in range(2))
-        b = " + ".join(f"RT[{i}, {k}] * vb{i}" for i in range(2))
-        put(2, f"x = {a}")
-        put(2, f"y = {b}")
+        put(2, f"x = RT[0, {k}] * rb0 + RT[1, {k}] * rb1")
+        put(2, f"y = RT[0, {k}] * vb0 + RT[1, {k}] * vb1")
         if nn > 2:
             put(2, f"x += RT[2, {k}] * rb2")
             put(2, f"y += RT[2, {k}] * vb2")
         put(2, f"eb{k} = x + KP[{k}]")
         put(2, f"edb{k} = y")
-    # (no opening function is live here: OPN[k] * e > 0 is false; the tests are the same
-    # comparisons as _may_fire_k's, branching: on a plain step none holds)
+    # _may_fire_k's comparisons, branching (on a plain step none holds); with no opening
+    # function live, its OPN[k] * e > 0 is false
     put(2, "if " + " or ".join(f"eb{k} <= 0.0" for k in ks) + ":")
+    put(3, "handed = True")
     put(3, "break")
     for k in ks:
         put(2, f"if ed{k} < 0.0 and edb{k} > 0.0 and min(e{k}, eb{k}) - (4.0 / 27.0) * H * "
                f"(edb{k} - ed{k}) < 0.25 * max(e{k}, eb{k}):")
+        put(3, "handed = True")
         put(3, "break")
-    # the trackers at the end (_point_n at a_end = alpha + beta * tb)
-    put(2, "ag_b = alpha + beta * dt")
-    if acc:
-        for i in co:
-            x = " - ".join([f"-MR[{i}] - MG[{i}] * ag_b"]
-                           + [f"(MK[{i}, {j}] * rb{j} + MC[{i}, {j}] * vb{j})"
-                              for j in range(2 if i < 2 else 3)])
-            put(2, f"aa{i} = {x}")
-        if nn > 2:
-            for i in range(2):
-                put(2, f"aa{i} -= MK[{i}, 2] * rb2 + MC[{i}, 2] * vb2")
-        for i in co:
-            x = " - ".join([f"-MG[{i}] * beta"]
-                           + [f"(MK[{i}, {j}] * vb{j} + MC[{i}, {j}] * aa{j})"
-                              for j in range(2 if i < 2 else 3)])
-            put(2, f"jj{i} = {x}")
-        if nn > 2:
-            for i in range(2):
-                put(2, f"jj{i} -= MK[{i}, 2] * vb2 + MC[{i}, 2] * aa2")
-    for t in ts:
-        p, q = ("rb", "vb") if t < N_DISP else ("aa", "jj")
-        put(2, f"x = TR[{t}, 0] * {p}0 + TR[{t}, 1] * {p}1")
-        put(2, f"y = TR[{t}, 0] * {q}0 + TR[{t}, 1] * {q}1")
-        if nn > 2:
-            put(2, f"x += TR[{t}, 2] * {p}2")
-            put(2, f"y += TR[{t}, 2] * {q}2")
-        if t < N_DISP:
-            put(2, f"pb{t} = x")
-            put(2, f"db{t} = y")
-        else:
-            put(2, f"pb{t} = x + ag_b")
-            put(2, f"db{t} = y + beta")
-    # the peaks over the step (_peaks_over with s_end = 1)
+    # the trackers at the end (_point_n) and their peaks over the step (_peaks_over)
     put(2, "closer = False")
-    for t in ts:
+    for t in trackers:
+        put(2, f"x = TR[{t}, 0] * rb0 + TR[{t}, 1] * rb1")
+        put(2, f"y = TR[{t}, 0] * vb0 + TR[{t}, 1] * vb1")
+        if nn > 2:
+            put(2, f"x += TR[{t}, 2] * rb2")
+            put(2, f"y += TR[{t}, 2] * vb2")
+        put(2, f"pb{t} = x")
+        put(2, f"db{t} = y")
         put(2, f"u = abs(pb{t})")
         put(2, f"if u > pk{t}:")
         put(3, f"pk{t} = u")
-        # (_peaks_over's two tests, both evaluated and combined: one rarely taken branch)
-        put(2, f"bound = max(u, abs(p{t})) + (4.0 / 27.0) * Hs * (abs(dn{t}) + abs(db{t}))")
-        put(2, f"if (not dn{t} * db{t} >= 0.0) & (not bound * (1.0 + 1e-12) < "
+        # (both tests evaluated and combined: one branch, rarely taken)
+        put(2, f"bound = max(u, abs(p{t})) + (4.0 / 27.0) * Hs * (abs(d{t}) + abs(db{t}))")
+        put(2, f"if (not d{t} * db{t} >= 0.0) & (not bound * (1.0 + 1e-12) < "
                f"pk{t} * (1.0 - GATE)):")
-        put(3, f"lo, hi, slo, shi = _hermite_ext(p{t}, pb{t}, dn{t} * Hs, db{t} * Hs)")
+        put(3, f"lo, hi, slo, shi = _hermite_ext(p{t}, pb{t}, d{t} * Hs, db{t} * Hs)")
         put(3, "est = max(abs(lo) if lo != np.inf else 0.0, abs(hi) if hi != -np.inf "
                "else 0.0)")
         put(3, f"if not est < pk{t} * (1.0 - GATE):")
         put(4, "closer = True")
     put(2, "if closer:")
+    put(3, "handed = True")
     put(3, "break")
     # the step is done: its end is the next one's start
     put(2, "n_plain += 1")
@@ -1482,7 +1459,7 @@ def _plain_source(nn: int, t_lo: int, t_hi: int) -> str:
     for k in ks:
         put(2, f"e{k} = eb{k}")
         put(2, f"ed{k} = edb{k}")
-    for t in ts:
+    for t in trackers:
         put(2, f"p{t} = pb{t}")
         put(2, f"d{t} = db{t}")
     put(2, "beta_prev = beta")
@@ -1493,19 +1470,27 @@ def _plain_source(nn: int, t_lo: int, t_hi: int) -> str:
     for k in ks:
         put(1, f"e_a[{k}] = e{k}")
         put(1, f"ed_a[{k}] = ed{k}")
-    for t in ts:
+    for t in trackers:
         put(1, f"val_a[{t}] = p{t}")
         put(1, f"der_a[{t}] = d{t}")
         put(1, f"peaks[{t}] = pk{t}")
-    put(1, "return step, n_plain, fam1_time, beta_prev")
-    return "\n".join(L) + "\n"
+    put(1, "if handed:")  # the step left undone: its end state and event functions
+    for i in co:
+        put(2, f"rb[{i}] = rb{i}")
+        put(2, f"vb[{i}] = vb{i}")
+    for k in ks:
+        put(2, f"e_b[{k}] = eb{k}")
+        put(2, f"ed_b[{k}] = edb{k}")
+    put(1, "return step, n_plain, fam1_time, beta_prev, handed")
+    return "\n".join(lines) + "\n"
 
 
+CAPACITY_TRACKERS = (TR_D1F1, TR_D1F2, TR_D2)  # what a collapse capacity search reads
+PLAIN_RUNS = {}  # name: the compiled run of plain steps, per number of coordinates
 for _nn in (2, NP):
-    for _lo, _hi in ((0, N_TRACK), (TR_D1F1, TR_D2 + 1)):
-        exec(_plain_source(_nn, _lo, _hi), globals())
-        globals()[f"_plain_{_nn}_{_lo}_{_hi}"] = inline(globals()[f"_plain_{_nn}_{_lo}_{_hi}"])
-
+    _name = f"_plain_{_nn}"
+    exec(_plain_source(_nn, CAPACITY_TRACKERS), globals())  # defines it
+    PLAIN_RUNS[_name] = globals()[_name] = inline(globals()[_name])
 
 @inner
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
@@ -1595,7 +1580,7 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
         return ST_NEED_PIECE
     ne = active_events(P, L, REL[mid], ist, g_open, rows, vrows, agc, sig, kap, kind, tgt)
     ke = KE if ne <= KE else MAX_EV  # event functions the hot loops evaluate
-    rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
+    rel, opens = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
     MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], vecs[mid, 1], \
         prop[mid], pvec[mid]
     a_now = ag[0] if N > 0 else 0.0
@@ -1613,27 +1598,20 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
     ev_here = 0  # events in the current span of EVENT_SPAN seconds, which ends at span_end
     span_end = -1.0
     step = 0
+    handed = False  # True: a run of plain steps computed the first sub-step (rb, vb, e_b, ed_b)
     while step < nsteps:
-        if nsub[mid] == 1 and near == 0 and not rel and ke == KE and not want_hist:
+        if capacity and nsub[mid] == 1 and near == 0 and not rel and not opens \
+                and ke == KE and not want_hist:
             # a run of plain steps, state in locals (until something may happen)
             fam1 = ist[I_FAM] == 1
             if n == 2:
-                if capacity:
-                    step, n_plain, fam1_time, beta_prev = _plain_2_3_6(
-                        ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
-                        RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
-                else:
-                    step, n_plain, fam1_time, beta_prev = _plain_2_0_9(
-                        ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
-                        RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
-            elif capacity:
-                step, n_plain, fam1_time, beta_prev = _plain_3_3_6(
-                    ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
-                    RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
+                step, n_plain, fam1_time, beta_prev, handed = _plain_2(
+                    ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV, RT, KP,
+                    TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b)
             else:
-                step, n_plain, fam1_time, beta_prev = _plain_3_0_9(
-                    ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV,
-                    RT, KP, OPN, TR, MK, MC, MR, MG, r, v, e_a, ed_a, val_a, der_a, peaks)
+                step, n_plain, fam1_time, beta_prev, handed = _plain_3(
+                    ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV, RT, KP,
+                    TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b)
             n_sub += n_plain
             if step >= nsteps:
                 break
@@ -1674,12 +1652,15 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
             a0 = alpha + beta * tau
             full = (tau == 0.0 and ns == 1) or abs(H - h_sub) <= 1e-12 * h_sub
             m_taylor = 0
-            if full:
-                _propagate(E, PV, r, v, a0, beta, rb, vb, n)
+            if handed:  # (computed by the run of plain steps, by the same operations)
+                handed = False
             else:
-                m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
-                _sum_state(D, m_taylor, 1.0, H, rb, vb, n)
-            _events_at(RT, KP, rb, vb, e_b, ed_b, n, ke)
+                if full:
+                    _propagate(E, PV, r, v, a0, beta, rb, vb, n)
+                else:
+                    m_taylor = _taylor(MK, MC, MR, MG, r, v, a0, beta, H, D, n)
+                    _sum_state(D, m_taylor, 1.0, H, rb, vb, n)
+                _events_at(RT, KP, rb, vb, e_b, ed_b, n, ke)
             if rel:
                 _events_rel(RVT, AGT, MK, MC, MR, MG, rb, vb, alpha + beta * tb, beta, e_b,
                             ed_b)
@@ -1833,7 +1814,8 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
                 ne = active_events(P, L, REL[mid], ist, g_open, rows, vrows, agc, sig, kap,
                                    kind, tgt)
                 ke = KE if ne <= KE else MAX_EV
-                rel = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP, OPN)
+                rel, opens = _event_table(rows, vrows, agc, sig, kap, kind, ne, RT, RVT, AGT, KP,
+                                          OPN)
                 MK, MC, MR, MG, E, PV = mats[mid, 0], mats[mid, 1], vecs[mid, 0], \
                     vecs[mid, 1], prop[mid], pvec[mid]
                 # (on the piece's coordinates: the padding ones have zero rows)
@@ -1896,7 +1878,8 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
 
 
 # the loop as urmx.native compiles and calls it
-LOOP = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",))
+LOOP = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",),
+                   vectorize=tuple(PLAIN_RUNS))
 
 
 # The event semantics as the scipy reference solver calls them from Python: the same

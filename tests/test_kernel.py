@@ -999,6 +999,25 @@ def test_capacity_tracking_gives_the_drifts_and_ratios_of_a_full_run_bit_for_bit
     assert collapsed == {0, 1}  # both sides of collapse were compared
 
 
+@pytest.mark.parametrize("support", list(SUPPORTS))
+def test_capacity_tracking_on_a_finely_sampled_record_equals_a_full_run(support):
+    """The same on El Centro resampled at dt/4 (the same piecewise-linear motion): long runs
+    of plain steps between events, which a capacity search's analysis integrates in a loop
+    of its own (state in locals, vectorised); each of its steps must give the bits of the
+    general loop, or the drifts, ratios and the time in family 1 part from a full run's."""
+    ag, dt = elcentro()
+    fine = np.interp(np.arange(4 * (len(ag) - 1) + 1) / 4.0, np.arange(len(ag)), ag)
+    wall = SUPPORTS[support]
+    for scale in (0.5, 1.2):
+        full = kernel.run(wall, fine, dt / 4, scale=scale)
+        cap = kernel.run(wall, fine, dt / 4, scale=scale, track="capacity")
+        assert full["substeps"] > 4 * full["events"]  # mostly plain steps
+        for key in ("instability_ratio_lower", "instability_ratio_upper", "peak_lower_drift",
+                    "peak_upper_drift", "peak_lower_drift_family1", "collapsed",
+                    "unfavourable_fraction", "events", "substeps"):
+            assert cap[key] == full[key], (key, scale, cap[key], full[key])
+
+
 def test_an_unknown_tracking_mode_is_refused():
     ag, dt = elcentro()
     with pytest.raises(InputError, match="track='drift' is not a tracking mode"):

@@ -1486,11 +1486,19 @@ def _plain_source(nn: int, trackers: tuple) -> str:
 
 
 CAPACITY_TRACKERS = (TR_D1F1, TR_D1F2, TR_D2)  # what a collapse capacity search reads
-PLAIN_RUNS = {}  # name: the compiled run of plain steps, per number of coordinates
-for _nn in (2, NP):
-    _name = f"_plain_{_nn}"
-    exec(_plain_source(_nn, CAPACITY_TRACKERS), globals())  # defines it
-    PLAIN_RUNS[_name] = globals()[_name] = inline(globals()[_name])
+
+
+def _plain_run(nn: int):
+    """The run of plain steps on nn coordinates, compiled (inlined into the loop)."""
+    made: dict = {}
+    exec(_plain_source(nn, CAPACITY_TRACKERS), globals(), made)  # (its names: this module's)
+    return inline(made[f"_plain_{nn}"])
+
+
+_plain_2 = _plain_run(2)
+_plain_3 = _plain_run(NP)
+PLAIN_RUNS = ("_plain_2", "_plain_3")  # compiled with the SLP vectorizer (native.Loop)
+
 
 @inner
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
@@ -1879,7 +1887,7 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
 
 # the loop as urmx.native compiles and calls it
 LOOP = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",),
-                   vectorize=tuple(PLAIN_RUNS))
+                   vectorize=PLAIN_RUNS)
 
 
 # The event semantics as the scipy reference solver calls them from Python: the same

@@ -67,6 +67,7 @@ import datetime as _dt
 import itertools
 import os
 import shutil
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -448,11 +449,15 @@ def _client(scheduler: Any, warm_up: Callable[[], None] | None = None) -> tuple[
         return get_client(scheduler, warm_up)
 
 
-def _saver(cells: Cells, sources: Sources, bar: Progress, stats: RunStats) -> Callable:
-    """The callback that keeps each finished batch (a part, its cells placed)."""
+def _saver(cells: Cells, sources: Sources, bar: Progress, stats: RunStats,
+           first: Callable[[], None] = lambda: None) -> Callable:
+    """The callback that keeps each finished batch (a part, its cells placed); `first` is
+    called as each result arrives (the kind's `_Prepared` starts on the first: once the
+    workers run, not while the cluster starts)."""
     kind = cells.kind
 
     def on_result(batch: Batch, result: dict[str, np.ndarray]) -> None:
+        first()
         arrays = {}
         for name, value in result.items():
             if name.startswith("extra."):
@@ -526,9 +531,11 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
                                   archive[1] if archive else None)):
         bar.note(line)
     batches = (_made(cells, b, records, kernel, sources) for b in cut)
+    preparing = _Prepared(kind.prepare, study, records)
     try:
         _compute_all(batches, stats.runs - stats.from_parts - stats.from_archive, records,
-                     study.records, scheduler, _saver(cells, sources, bar, stats), kind.run,
+                     study.records, scheduler,
+                     _saver(cells, sources, bar, stats, preparing.start), kind.run,
                      kind.warm_up)
     except RunError as exc:
         kept = store.count() if store is not None else 0
@@ -541,7 +548,45 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
         bar.close()
     attrs = {**global_attrs(study, started, command), "study_definition": base(study, kind)}
     attrs["history"] = merged_history(attrs["history"], earlier)
-    return _assemble(cells, sources, records, attrs, lazy=store is not None)
+    return _assemble(cells, sources, records, attrs, lazy=store is not None,
+                     prepared=preparing.result())
+
+
+class _Prepared:
+    """A kind's ``prepare(study, records)``, run in a thread of this process while the
+    cells run (its CPU time taken from the workers' slack; started by :meth:`start` when
+    the first result arrives, not while the cluster starts), and its result. The thread is
+    a daemon: a run that fails does not wait for it."""
+
+    def __init__(self, prepare: Callable | None, study: Study, records: dict):
+        self._prepare, self._args = prepare, (study, records)
+        self._value = self._error = self._thread = None
+
+    def _work(self) -> None:
+        try:
+            self._value = self._prepare(*self._args)
+        except BaseException as exc:  # noqa: BLE001 - raised where the result is taken
+            self._error = exc
+
+    def start(self) -> None:
+        """Start the thread (once; nothing without ``prepare``)."""
+        if self._prepare is not None and self._thread is None:
+            self._thread = threading.Thread(target=self._work, name="urmx-prepare",
+                                            daemon=True)
+            self._thread.start()
+
+    def result(self) -> Any:
+        """The kind's prepared value (None without ``prepare``; computed here if no result
+        started it); its error, raised here."""
+        if self._prepare is None:
+            return None
+        if self._thread is None:
+            self._work()
+        else:
+            self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
 
 
 def merged_history(line: str, earlier: str) -> str:
@@ -553,9 +598,10 @@ def merged_history(line: str, earlier: str) -> str:
 
 
 def _assemble(cells: Cells, sources: Sources, records: dict, attrs: dict,
-              lazy: bool) -> xr.Dataset:
+              lazy: bool, prepared: Any = None) -> xr.Dataset:
     """The kind's Dataset of every cell's result; with `lazy`, over dask arrays gathered
-    from the parts, with ``cell_key`` and netCDF chunks of one slab."""
+    from the parts, with ``cell_key`` and netCDF chunks of one slab; `prepared`: what the
+    kind's ``prepare`` gave (passed on when it has one)."""
     import xarray as xr
 
 
@@ -565,8 +611,9 @@ def _assemble(cells: Cells, sources: Sources, records: dict, attrs: dict,
         raise RunError(f"{missing:,} {kind.unit} of study {cells.study.name!r} have no "
                        "result after the run (a bug in urmx): run again")
     arrays = sources.lazy() if lazy else sources.eager()
+    more = {"prepared": prepared} if kind.prepare is not None else {}
     ds = kind.assemble(cells.study, records, {n: arrays[n] for n in kind.outputs},
-                       sources.extras(), attrs)
+                       sources.extras(), attrs, **more)
     if lazy:
         ds["cell_key"] = xr.Variable(cells.names, arrays["cell_key"],
                                      attrs=variables.attrs("cell_key"))

@@ -13,6 +13,7 @@ step), the unit and the point count.
 
 from __future__ import annotations
 
+import itertools
 import re
 from pathlib import Path
 
@@ -240,8 +241,8 @@ def parse_columns(path: Path, raw: bytes, encoding: str) -> list[Channel]:
 def _decimal_commas(path: Path, lines: list[str], lineno: int) -> None:
     """Refuse numbers written with a decimal comma (``0,005``), which a comma-separated
     reading would split in two: all of the first 50 data lines look like one."""
-    body = [(i, s.strip()) for i, s in enumerate(lines, lineno)
-            if s.strip() and not s.strip().startswith("#")][:50]
+    body = list(itertools.islice(((i, s.strip()) for i, s in enumerate(lines, lineno)
+                                  if s.strip() and not s.strip().startswith("#")), 50))
     if body and header_names(body[0][1]) is not None:
         body = body[1:]
     if body and all(DECIMAL_COMMA.fullmatch(s) for _, s in body):

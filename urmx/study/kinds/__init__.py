@@ -83,6 +83,11 @@ Optional, with defaults:
 ``cell_bytes(study) -> float``
     Bytes of one cell's outputs in the archive, for the size check before a run (default
     8 per output).
+``prepare(study, records) -> object``
+    What ``assemble`` needs of the study and its records alone (not of the cells): computed
+    in a thread of this process while the cells run, and passed to ``assemble`` as
+    ``prepared=`` (the IDA kind's record measures: about a second of spectra that the end
+    of a run no longer waits for). Default: none.
 ``chain``, ``chain_tag``, ``chained``
     A dimension along which each cell starts from the result of the cell before it (the
     IDA kinds' ``wall``: warm-started searches), what that means (folded into the cells'

@@ -12,6 +12,7 @@ import os
 import pickle
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -263,3 +264,83 @@ def test_a_new_kind_runs_and_reports_with_one_line_in_each_registry(tiny, make_s
     del REPORTS["tiny"]
     assert "tiny" not in {k.name for k in kinds.registered()}
     assert writer(ds) is REPORTS[DEFAULT] and REPORTS[DEFAULT] is not tiny_report
+
+
+# ---- what a kind prepares while its cells run; the parts kept for the gathering --------------
+
+PREPARED: list[tuple[str, int]] = []  # (thread, batches run before prepare began)
+
+
+def prepped_parse(study):
+    return float(study.tables["prepped"].get("gain", 1.0))
+
+
+def prepped_prepare(study, records):
+    PREPARED.append((threading.current_thread().name, len(RUNS)))
+    if study.settings < 0.5:
+        raise ValueError("prepare refused a gain below 0.5")
+    return {rid: float(np.max(np.abs(records[rid].acceleration))) for rid in study.records}
+
+
+def prepped_assemble(study, records, cells, extras, attrs, prepared=None):
+    ds = toy_assemble(study, records, cells, extras, attrs)
+    ds["peak"] = ("record", [prepared[rid] for rid in study.records])
+    return ds
+
+
+@pytest.fixture
+def prepped(make_study, use_records):
+    """The toy with a ``prepare`` (the record peaks) that assemble stores."""
+    kinds.register(kinds.Kind(name="prepped", table="prepped", unit="cells",
+                              outputs=("value",), parse=prepped_parse, task=toy_task,
+                              run=toy_run, assemble=prepped_assemble,
+                              prepare=prepped_prepare))
+    use_records(ACC, SCALE, DT)
+    RUNS.clear()
+    PREPARED.clear()
+    yield lambda gain: make_study(STUDY.replace("[study.toy]", "[study.prepped]").replace(
+        "gain = 2.0", f"gain = {gain}"), "prepped.toml")
+    kinds.unregister("prepped")
+
+
+def test_a_kinds_prepare_runs_in_a_thread_once_the_cells_run_and_reaches_assemble(
+        prepped, tmp_path):
+    """``prepare`` starts with the first result (in its own thread, not while a cluster
+    starts) and its value reaches ``assemble``; without cells to run it runs there."""
+    out = tmp_path / "prepped.nc"
+    ds = urmx.run_study(prepped(2.0), out=out, scheduler="serial", progress=False,
+                        batch_size=1)
+    (thread, before), = PREPARED
+    assert thread == "urmx-prepare" and before >= 1  # after the first batch, in a thread
+    np.testing.assert_array_equal(ds.peak.values, [2.0, 3.0])  # the records' peaks
+    PREPARED.clear()
+    again = urmx.run_study(prepped(2.0), out=out, scheduler="serial", progress=False)
+    assert PREPARED[0][0] == "MainThread"  # every cell taken from the archive
+    np.testing.assert_array_equal(again.peak.values, ds.peak.values)
+
+
+def test_a_failing_prepare_fails_the_run_with_its_own_error(prepped, tmp_path):
+    with pytest.raises(ValueError, match="prepare refused a gain below 0.5"):
+        urmx.run_study(prepped(0.25), out=tmp_path / "bad.nc", scheduler="serial",
+                       progress=False, batch_size=1)
+    assert [t for t, _ in PREPARED] == ["urmx-prepare"] and len(RUNS) == BATCHES
+
+
+def test_the_parts_just_saved_are_gathered_from_memory_with_the_same_archive(
+        toy, tmp_path, monkeypatch):
+    """The parts of a small study are gathered from the copies kept when they were saved
+    (no file read back); with no room to keep them, from the files: the same archive."""
+    from urmx.study import sources
+
+    reads = []
+    load = sources.load_part
+    monkeypatch.setattr(sources, "load_part", lambda *a: reads.append(a) or load(*a))
+    kept = urmx.run_study(toy, out=tmp_path / "kept.nc", scheduler="serial",
+                          progress=False, batch_size=1)
+    assert reads == []
+    monkeypatch.setattr(sources, "RECENT_BYTES", 0)
+    read = urmx.run_study(toy, out=tmp_path / "read.nc", scheduler="serial",
+                          progress=False, batch_size=1)
+    assert len(reads) == BATCHES
+    same_run(kept, read)
+    xr.testing.assert_identical(kept.value, read.value)

@@ -1344,58 +1344,11 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
 
 # ---- runs of plain steps (capacity tracking) --------------------------------------------
 
-def _plain_source(nn: int, trackers: tuple) -> str:
-    """Source of the loop that a capacity search's analysis (``track="capacity"``) runs over
-    whole record steps on which nothing happens: one sub-step a step (``nsub == 1``), no
-    function near zero, no release or opening function, the KE event functions. Its state
-    (coordinates, event functions, the displacement-type trackers given and their peaks)
-    lives in locals, which the compiler keeps in registers or on the stack, where the
-    general loop keeps it in arrays that it cannot prove apart and reloads after every
-    store; and it is optimised with LLVM's SLP vectorizer (``native.Loop.vectorize``),
-    which packs the independent rows of the propagator and of the event functions (the
-    order of each sum unchanged). Every value is computed by the operations of the general
-    loop (:func:`_propagate_n`, :func:`_events_at_n`, :func:`_may_fire_k`,
-    :func:`_point_n`, :func:`_peaks_over` with ``s_end = 1``) in their order, so a step
-    gives the same bits either way. A step on which an event function may fire or an
-    interior extremum needs the series is handed over undone: the general loop takes it
-    from the end state and event functions written to rb, vb, e_b and ed_b.
-
-    Generated per number of coordinates (the loops over coordinates, functions and
-    trackers unrolled into named locals). The benchmark analysis, tracking all 9 outputs
-    with a few steps between events, ran 0.93x as fast with such a loop (and 0.96x with one
-    in the code, unused: the loop's own code grew), so full tracking keeps the general
-    loop."""
-    assert all(t < N_DISP for t in trackers)  # (no ground or jerk terms)
+def _plain_step(put, nn: int, trackers: tuple) -> None:
+    """The body of :func:`_plain_source`'s loop that computes a step's end and leaves the
+    loop (``handed``) when something may happen on it."""
     co = range(nn)
     ks = range(KE)
-    lines = []
-
-    def put(indent, line):
-        lines.append("    " * indent + line)
-
-    put(0, f"def _plain_{nn}(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, "
-           "PV, RT, KP, TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b):")
-    for i in co:
-        put(1, f"r{i} = r[{i}]")
-        put(1, f"v{i} = v[{i}]")
-    for k in ks:
-        put(1, f"e{k} = e_a[{k}]")
-        put(1, f"ed{k} = ed_a[{k}]")
-    for t in trackers:
-        put(1, f"p{t} = val_a[{t}]")
-        put(1, f"d{t} = der_a[{t}]")
-        put(1, f"pk{t} = peaks[{t}]")
-    put(1, "H = dt - 0.0")  # tb - tau of the general loop, and s_end * H
-    put(1, "Hs = 1.0 * H")
-    put(1, "n_plain = 0")
-    put(1, "handed = False")
-    put(1, "while step < nsteps and step != N - 2:")
-    put(2, "if step < N - 1:")
-    put(3, "alpha = ag[step]")
-    put(3, "beta = (ag[step + 1] - ag[step]) * inv_dt")
-    put(2, "else:")
-    put(3, "alpha = 0.0")
-    put(3, "beta = 0.0")
     put(2, "a0 = alpha + beta * 0.0")
     # the exact propagator (_propagate_n)
     for i in co:
@@ -1449,7 +1402,13 @@ def _plain_source(nn: int, trackers: tuple) -> str:
     put(2, "if closer:")
     put(3, "handed = True")
     put(3, "break")
-    # the step is done: its end is the next one's start
+
+
+def _plain_end(put, nn: int, trackers: tuple) -> None:
+    """The end of :func:`_plain_source`'s loop (a step done: its end is the next one's
+    start) and what the function writes back and returns."""
+    co = range(nn)
+    ks = range(KE)
     put(2, "n_plain += 1")
     put(2, "if fam1:")
     put(3, "fam1_time += 1.0 * H")
@@ -1482,6 +1441,62 @@ def _plain_source(nn: int, trackers: tuple) -> str:
         put(2, f"e_b[{k}] = eb{k}")
         put(2, f"ed_b[{k}] = edb{k}")
     put(1, "return step, n_plain, fam1_time, beta_prev, handed")
+
+
+def _plain_source(nn: int, trackers: tuple) -> str:
+    """Source of the loop that a capacity search's analysis (``track="capacity"``) runs over
+    whole record steps on which nothing happens: one sub-step a step (``nsub == 1``), no
+    function near zero, no release or opening function, the KE event functions. Its state
+    (coordinates, event functions, the displacement-type trackers given and their peaks)
+    lives in locals, which the compiler keeps in registers or on the stack, where the
+    general loop keeps it in arrays that it cannot prove apart and reloads after every
+    store; and it is optimised with LLVM's SLP vectorizer (``native.Loop.vectorize``),
+    which packs the independent rows of the propagator and of the event functions (the
+    order of each sum unchanged). Every value is computed by the operations of the general
+    loop (:func:`_propagate_n`, :func:`_events_at_n`, :func:`_may_fire_k`,
+    :func:`_point_n`, :func:`_peaks_over` with ``s_end = 1``) in their order, so a step
+    gives the same bits either way. A step on which an event function may fire or an
+    interior extremum needs the series is handed over undone: the general loop takes it
+    from the end state and event functions written to rb, vb, e_b and ed_b.
+
+    Generated per number of coordinates (the loops over coordinates, functions and
+    trackers unrolled into named locals). The benchmark analysis, tracking all 9 outputs
+    with a few steps between events, ran 0.93x as fast with such a loop (and 0.96x with one
+    in the code, unused: the loop's own code grew), so full tracking keeps the general
+    loop."""
+    assert all(t < N_DISP for t in trackers)  # (no ground or jerk terms)
+    co = range(nn)
+    ks = range(KE)
+    lines = []
+
+    def put(indent, line):
+        lines.append("    " * indent + line)
+
+    put(0, f"def _plain_{nn}(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, "
+           "PV, RT, KP, TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b):")
+    for i in co:
+        put(1, f"r{i} = r[{i}]")
+        put(1, f"v{i} = v[{i}]")
+    for k in ks:
+        put(1, f"e{k} = e_a[{k}]")
+        put(1, f"ed{k} = ed_a[{k}]")
+    for t in trackers:
+        put(1, f"p{t} = val_a[{t}]")
+        put(1, f"d{t} = der_a[{t}]")
+        put(1, f"pk{t} = peaks[{t}]")
+    put(1, "H = dt - 0.0")  # tb - tau of the general loop, and s_end * H
+    put(1, "Hs = 1.0 * H")
+    put(1, "n_plain = 0")
+    put(1, "handed = False")
+    put(1, "while step < nsteps and step != N - 2:")
+    put(2, "if step < N - 1:")
+    put(3, "alpha = ag[step]")
+    put(3, "beta = (ag[step + 1] - ag[step]) * inv_dt")
+    put(2, "else:")
+    put(3, "alpha = 0.0")
+    put(3, "beta = 0.0")
+    _plain_step(put, nn, trackers)
+    _plain_end(put, nn, trackers)
     return "\n".join(lines) + "\n"
 
 

@@ -30,8 +30,7 @@ SLAB = 2 ** 17
 REUSED_PART = 2 ** 16
 CACHE = 64  # parts held at once while gathering
 #: bytes of the parts saved last that are also kept in memory, so that gathering them at the
-#: end of a run reads no file (all of a small study's parts: 3,240 cells of capacity
-#: searches hold 2 MB)
+#: end of a run reads no file (all of a small study's parts: a few MB)
 RECENT_BYTES = 16 * 2 ** 20
 
 

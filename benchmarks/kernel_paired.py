@@ -525,9 +525,27 @@ WHY = [
     "only the drift trackers (`track=\"capacity\"`). Two tries were slower and were "
     "dropped: the peak test without branches (the IDA analysis's fine steps predict the "
     "branches well) and exchanging the roles of the start and end arrays instead of "
-    "copying them (0.84x: the compiler no longer keeps them in place). What is left for "
-    "the targets changes results at the round-off level and must then be judged on the "
-    "pinned archives (a chaotic cell moves with any ulp): a cheaper root finder or "
-    "polish, a series reused across an impact, or a register-resident loop for runs of "
-    "plain sub-steps.",
+    "copying them (0.84x: the compiler no longer keeps them in place).",
+    "",
+    "**Runs of plain steps (issue 41, second pass).** A capacity search's analysis "
+    "(`track=\"capacity\"`) integrates the record steps on which nothing can happen (one "
+    "sub-step, no function near zero, no release or opening function) in a loop of its "
+    "own, generated per number of coordinates, whose state lives in locals and which LLVM's "
+    "SLP vectorizer compiles (for those functions only: on the whole loop it cost 10-15 %); "
+    "each value is computed by the general loop's operations in their order, and a step on "
+    "which an event may fire is handed to the general loop with its end state. The IDA "
+    "analysis as a capacity search runs it went from 1.48x to 2.2x of `834f656` with "
+    "results bit for bit (258 analyses and capacity runs against the kernel before). In a "
+    "synthetic loop without events (20,000 steps, fastest of 30) such a step takes 14 ns on "
+    "2 coordinates and 18 ns on 3, against about 38 ns in the general loop (the capacity "
+    "run before: 0.68 ms, less 0.23 ms of events and 0.02 ms of Python, over 11,471 "
+    "sub-steps). Full tracking "
+    "keeps the general loop: the benchmark analysis, with 4 steps between events and 9 "
+    "trackers with accelerations, ran 0.93x as fast with a loop of this kind (and 0.96x "
+    "with one in the code, unused: the loop's own code grew), so the benchmark targets "
+    "stay missed. The cost: the first compile takes about 5 s more CPU (two functions of "
+    "216 and 264 generated lines, about 2 s each in numba's front end and lowering). What "
+    "is left for the benchmark targets changes results at the round-off level and must "
+    "then be judged on the pinned archives (a chaotic cell moves with any ulp): a cheaper "
+    "root finder or polish, or a series reused across an impact.",
 ]

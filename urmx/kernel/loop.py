@@ -1344,6 +1344,28 @@ def _peaks_over(TR, peaks, val_a, der_a, val_b, der_b, s_end, m_taylor, D, cf, M
 
 # ---- runs of plain steps (capacity tracking) --------------------------------------------
 
+def _plain_state(nn: int, trackers: tuple) -> list[tuple[str, str, str, str | None]]:
+    """The state a run of plain steps carries in locals: (local at the step's start, local
+    at its end, the array it is read from and written back to, the array the end of a
+    step handed over is written to)."""
+    return ([(f"r{i}", f"rb{i}", f"r[{i}]", f"rb[{i}]") for i in range(nn)]
+            + [(f"v{i}", f"vb{i}", f"v[{i}]", f"vb[{i}]") for i in range(nn)]
+            + [(f"e{k}", f"eb{k}", f"e_a[{k}]", f"e_b[{k}]") for k in range(KE)]
+            + [(f"ed{k}", f"edb{k}", f"ed_a[{k}]", f"ed_b[{k}]") for k in range(KE)]
+            + [(f"p{t}", f"pb{t}", f"val_a[{t}]", None) for t in trackers]
+            + [(f"d{t}", f"db{t}", f"der_a[{t}]", None) for t in trackers])
+
+
+def _plain_row(put, nn: int, coef: list[str]) -> None:
+    """``x`` and ``y``: a row of coefficients `coef` times the end state and its rates, in
+    the order of :func:`_events_at_n` and :func:`_point_n`."""
+    put(2, f"x = {coef[0]} * rb0 + {coef[1]} * rb1")
+    put(2, f"y = {coef[0]} * vb0 + {coef[1]} * vb1")
+    if nn > 2:
+        put(2, f"x += {coef[2]} * rb2")
+        put(2, f"y += {coef[2]} * vb2")
+
+
 def _plain_step(put, nn: int, trackers: tuple) -> None:
     """The body of :func:`_plain_source`'s loop that computes a step's end and leaves the
     loop (``handed``) when something may happen on it."""
@@ -1360,11 +1382,7 @@ def _plain_step(put, nn: int, trackers: tuple) -> None:
             put(2, f"vb{i} += E[{NP + i}, {col}] * {c}{j}")
     # the event functions at the end (_events_at_n)
     for k in ks:
-        put(2, f"x = RT[0, {k}] * rb0 + RT[1, {k}] * rb1")
-        put(2, f"y = RT[0, {k}] * vb0 + RT[1, {k}] * vb1")
-        if nn > 2:
-            put(2, f"x += RT[2, {k}] * rb2")
-            put(2, f"y += RT[2, {k}] * vb2")
+        _plain_row(put, nn, [f"RT[{i}, {k}]" for i in co])
         put(2, f"eb{k} = x + KP[{k}]")
         put(2, f"edb{k} = y")
     # _may_fire_k's comparisons, branching (on a plain step none holds); with no opening
@@ -1380,11 +1398,7 @@ def _plain_step(put, nn: int, trackers: tuple) -> None:
     # the trackers at the end (_point_n) and their peaks over the step (_peaks_over)
     put(2, "closer = False")
     for t in trackers:
-        put(2, f"x = TR[{t}, 0] * rb0 + TR[{t}, 1] * rb1")
-        put(2, f"y = TR[{t}, 0] * vb0 + TR[{t}, 1] * vb1")
-        if nn > 2:
-            put(2, f"x += TR[{t}, 2] * rb2")
-            put(2, f"y += TR[{t}, 2] * vb2")
+        _plain_row(put, nn, [f"TR[{t}, {i}]" for i in co])
         put(2, f"pb{t} = x")
         put(2, f"db{t} = y")
         put(2, f"u = abs(pb{t})")
@@ -1407,39 +1421,22 @@ def _plain_step(put, nn: int, trackers: tuple) -> None:
 def _plain_end(put, nn: int, trackers: tuple) -> None:
     """The end of :func:`_plain_source`'s loop (a step done: its end is the next one's
     start) and what the function writes back and returns."""
-    co = range(nn)
-    ks = range(KE)
+    state = _plain_state(nn, trackers)
     put(2, "n_plain += 1")
     put(2, "if fam1:")
     put(3, "fam1_time += 1.0 * H")
-    for i in co:
-        put(2, f"r{i} = rb{i}")
-        put(2, f"v{i} = vb{i}")
-    for k in ks:
-        put(2, f"e{k} = eb{k}")
-        put(2, f"ed{k} = edb{k}")
-    for t in trackers:
-        put(2, f"p{t} = pb{t}")
-        put(2, f"d{t} = db{t}")
+    for start, end, _, _ in state:
+        put(2, f"{start} = {end}")
     put(2, "beta_prev = beta")
     put(2, "step += 1")
-    for i in co:
-        put(1, f"r[{i}] = r{i}")
-        put(1, f"v[{i}] = v{i}")
-    for k in ks:
-        put(1, f"e_a[{k}] = e{k}")
-        put(1, f"ed_a[{k}] = ed{k}")
+    for start, _, array, _ in state:
+        put(1, f"{array} = {start}")
     for t in trackers:
-        put(1, f"val_a[{t}] = p{t}")
-        put(1, f"der_a[{t}] = d{t}")
         put(1, f"peaks[{t}] = pk{t}")
     put(1, "if handed:")  # the step left undone: its end state and event functions
-    for i in co:
-        put(2, f"rb[{i}] = rb{i}")
-        put(2, f"vb[{i}] = vb{i}")
-    for k in ks:
-        put(2, f"e_b[{k}] = eb{k}")
-        put(2, f"ed_b[{k}] = edb{k}")
+    for _, end, _, handed in state:
+        if handed is not None:
+            put(2, f"{handed} = {end}")
     put(1, "return step, n_plain, fam1_time, beta_prev, handed")
 
 
@@ -1465,8 +1462,6 @@ def _plain_source(nn: int, trackers: tuple) -> str:
     in the code, unused: the loop's own code grew), so full tracking keeps the general
     loop."""
     assert all(t < N_DISP for t in trackers)  # (no ground or jerk terms)
-    co = range(nn)
-    ks = range(KE)
     lines = []
 
     def put(indent, line):
@@ -1474,15 +1469,9 @@ def _plain_source(nn: int, trackers: tuple) -> str:
 
     put(0, f"def _plain_{nn}(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, "
            "PV, RT, KP, TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b):")
-    for i in co:
-        put(1, f"r{i} = r[{i}]")
-        put(1, f"v{i} = v[{i}]")
-    for k in ks:
-        put(1, f"e{k} = e_a[{k}]")
-        put(1, f"ed{k} = ed_a[{k}]")
+    for start, _, array, _ in _plain_state(nn, trackers):
+        put(1, f"{start} = {array}")
     for t in trackers:
-        put(1, f"p{t} = val_a[{t}]")
-        put(1, f"d{t} = der_a[{t}]")
         put(1, f"pk{t} = peaks[{t}]")
     put(1, "H = dt - 0.0")  # tb - tau of the general loop, and s_end * H
     put(1, "Hs = 1.0 * H")

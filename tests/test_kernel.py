@@ -1022,3 +1022,34 @@ def test_an_unknown_tracking_mode_is_refused():
     ag, dt = elcentro()
     with pytest.raises(InputError, match="track='drift' is not a tracking mode"):
         kernel.run(WEST, ag, dt, track="drift")
+
+
+# ---- tables at a second record step -------------------------------------------------------
+
+@pytest.mark.parametrize("support", list(SUPPORTS))
+def test_tables_taken_from_another_step_equal_tables_built_anew(support):
+    """A wall's tables at a second record step copy what does not depend on the step from
+    its tables at the first (geometry, piece matrices, release rows, eigenvalues) and
+    compute only the propagators: every array equals that of tables built from nothing,
+    and so does an analysis (pieces added later are computed, not copied)."""
+    from urmx.kernel import pieces
+
+    wall = SUPPORTS[support]
+    first = pieces.Tables(wall, 0.02)
+    like = pieces.Tables(wall, 0.005, first)
+    anew = pieces.Tables(wall, 0.005)
+    assert first.ready.any() and (like.ready == anew.ready).all()
+    for name in ("nsub", "mats", "vecs", "prop", "pvec", "rel", "nu"):
+        np.testing.assert_array_equal(getattr(like, name), getattr(anew, name), err_msg=name)
+    for a, b in zip(like.geo, anew.geo, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(like.prop, first.prop)  # (the step's own propagators)
+    ag, dt = elcentro()
+    fine = np.interp(np.arange(4 * (len(ag) - 1) + 1) / 4.0, np.arange(len(ag)), ag)
+    pieces.clear_cache()
+    kernel.run(wall, ag, dt, scale=1.2)  # its tables at 0.02 s: taken at dt / 4 below
+    shared = kernel.run(wall, fine, dt / 4, scale=1.2)
+    pieces.clear_cache()
+    anew = kernel.run(wall, fine, dt / 4, scale=1.2)
+    assert {k: repr(v) for k, v in shared.items()} == {k: repr(v) for k, v in anew.items()}
+    assert shared["events"] > 0

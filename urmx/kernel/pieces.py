@@ -186,14 +186,18 @@ class Tables:
     the held-state geometry, the piece tables (filled for the reachable pieces), and the
     work arrays of :func:`_march`."""
 
-    def __init__(self, wall: Wall, dt: float):
+    def __init__(self, wall: Wall, dt: float, like: Tables | None = None):
         # a copy: the loop reads aligned, contiguous arrays it alone owns (a wall of a study
         # batch may hold its parameters in an unaligned view of a received buffer)
         P = np.array(wall.params, dtype=np.float64)
         self.P = P
         self.dt = float(dt)
         self.nfull = n_dof(P)
-        self.geo = geometry(P)
+        # `like`: the same wall's tables at another record step, whose parts that do not
+        # depend on the step (geometry, piece matrices, release rows, eigenvalues) are
+        # copied, not computed again: the same numbers
+        self._like = like
+        self.geo = tuple(a.copy() for a in like.geo) if like is not None else geometry(P)
         self.ready = np.zeros(NPIECE, np.bool_)
         self.nsub = np.ones(NPIECE, np.int64)
         self.mats = np.zeros((NPIECE, 2, NP, NP))
@@ -201,6 +205,7 @@ class Tables:
         self.prop = np.zeros((NPIECE, 2 * NP, 2 * NP))
         self.pvec = np.zeros((NPIECE, 3, 2 * NP))
         self.rel = np.zeros((NPIECE, 2, 2, REL_W))
+        self.nu = np.zeros(NPIECE)  # each piece's largest |eigenvalue| [1/s]
         self.pieces = (self.ready, self.nsub, self.mats, self.vecs, self.prop, self.pvec,
                        self.rel)
         # the parts of the equations every piece shares (MODEL.md section 5)
@@ -215,6 +220,7 @@ class Tables:
         self._branch = {c: np.array([branch_coeffs(P, c, b) for b in range(-2, 3)])
                         for c in (1, 2, 3)}
         self.build(_reachable(P))
+        self._like = None  # (pieces added later are computed)
         self.work = (
             np.zeros((KMAX, NP)), np.zeros(KMAX), np.zeros(N_IST, np.int64),
             np.zeros((MAX_EV, NP)), np.zeros((MAX_EV, NP)), np.zeros(MAX_EV),
@@ -267,27 +273,42 @@ class Tables:
             if not self.ready[piece_index(*key)]:
                 groups.setdefault(key[:2], []).append(key)
         by_size: dict[int, list] = {}
+        like = self._like
         for (h, fam), ks in groups.items():
             ny = self._T[h].shape[1]
             mids = np.array([piece_index(*k) for k in ks])
-            bl, bu, bla = (np.array([k[i] for k in ks]) for i in (2, 3, 4))
-            Minv = GMI[h, fam - 1, :ny, :ny]
-            K, R0 = self._stiffness(h, 3 if fam == 1 else 2, bl, bu)
-            MK = Minv[None] @ K
-            MC = np.broadcast_to(Minv @ (self._T[h].T @ self._CD @ self._T[h]), MK.shape)
-            MR = R0 @ Minv.T
-            MG = np.broadcast_to(self._ground(h, fam, Minv), MR.shape)
-            self.mats[mids, 0, :ny, :ny] = MK
-            self.mats[mids, 1, :ny, :ny] = MC
-            self.vecs[mids, 0, :ny] = MR
-            self.vecs[mids, 1, :ny] = MG
-            if h != HELD_NONE:
-                self.rel[mids] = self._release_rows(h, fam, bl, bu, bla)
+            if like is not None and like.ready[mids].all():
+                for mine, theirs in ((self.mats, like.mats), (self.vecs, like.vecs),
+                                     (self.rel, like.rel), (self.nu, like.nu)):
+                    mine[mids] = theirs[mids]
+                MK, MC = self.mats[mids, 0, :ny, :ny], self.mats[mids, 1, :ny, :ny]
+                MR, MG = self.vecs[mids, 0, :ny], self.vecs[mids, 1, :ny]
+            else:
+                MK, MC, MR, MG = self._piece_matrices(h, fam, ny, mids, ks, GMI)
             by_size.setdefault(ny, []).append((mids, MK, MC, MR, MG))
         for ny, items in by_size.items():
             self._propagators(ny, *(np.concatenate(x) for x in zip(*items, strict=True)))
         for ks in groups.values():
             self.ready[[piece_index(*k) for k in ks]] = True
+
+    def _piece_matrices(self, h: int, fam: int, ny: int, mids, ks, GMI) -> tuple:
+        """M^-1 K, M^-1 C, M^-1 R0 and M^-1 G of pieces `ks` (indices `mids`) of held state
+        h and family `fam`, stored with their release rows; returned stacked."""
+        bl, bu, bla = (np.array([k[i] for k in ks]) for i in (2, 3, 4))
+        Minv = GMI[h, fam - 1, :ny, :ny]
+        K, R0 = self._stiffness(h, 3 if fam == 1 else 2, bl, bu)
+        MK = Minv[None] @ K
+        MC = np.broadcast_to(Minv @ (self._T[h].T @ self._CD @ self._T[h]), MK.shape)
+        MR = R0 @ Minv.T
+        MG = np.broadcast_to(self._ground(h, fam, Minv), MR.shape)
+        self.mats[mids, 0, :ny, :ny] = MK
+        self.mats[mids, 1, :ny, :ny] = MC
+        self.vecs[mids, 0, :ny] = MR
+        self.vecs[mids, 1, :ny] = MG
+        if h != HELD_NONE:
+            self.rel[mids] = self._release_rows(h, fam, bl, bu, bla)
+        self.nu[mids] = np.nan  # (not known yet: _propagators finds it)
+        return MK, MC, MR, MG
 
     def _release_rows(self, h, fam, bl, bu, bla) -> np.ndarray:
         """Unconstrained acceleration of each held joint's gap under each family, as rows
@@ -349,7 +370,12 @@ class Tables:
         Z[:, m + 1, m + 2] = 1.0
         if not np.isfinite(Z).all():
             raise InputError(self._too_stiff(math.inf))
-        nu = np.abs(np.linalg.eigvals(Z[:, :m, :m])).max(axis=-1) if m else np.zeros(npc)
+        nu = self.nu[mids]
+        if m and not np.isfinite(nu).all():  # (pieces copied from another step know it)
+            nu = np.abs(np.linalg.eigvals(Z[:, :m, :m])).max(axis=-1)
+            self.nu[mids] = nu
+        elif not m:
+            nu = np.zeros(npc)
         need = float(np.ceil(nu.max() * self.dt / RHO)) if npc else 1.0
         if not need <= MAX_SUBSTEPS:
             raise InputError(self._too_stiff(need))
@@ -380,7 +406,8 @@ def tables(wall: Wall, dt: float) -> Tables:
     key = (wall.params.tobytes(), float(dt))
     tab = _TABLES.get(key)
     if tab is None:
-        tab = Tables(wall, dt)
+        like = next((t for k, t in reversed(_TABLES.items()) if k[0] == key[0]), None)
+        tab = Tables(wall, dt, like)
         _TABLES[key] = tab
         if len(_TABLES) > _TABLES_MAX:
             _TABLES.popitem(last=False)

@@ -63,6 +63,7 @@ batches, and the record samples are tasks it can recompute, not scattered data.
 
 from __future__ import annotations
 
+import contextvars
 import datetime as _dt
 import itertools
 import os
@@ -555,8 +556,9 @@ def _run(study: Study, records: dict, store: PartStore | None, scheduler: Any,
 class _Prepared:
     """A kind's ``prepare(study, records)``, run in a thread of this process while the
     cells run (its CPU time taken from the workers' slack; started by :meth:`start` when
-    the first result arrives, not while the cluster starts), and its result. The thread is
-    a daemon: a run that fails does not wait for it."""
+    the first result arrives: on a cluster it urmx starts, once the workers run, not while
+    they start), and its result. The thread is a daemon: a run that fails does not wait
+    for it."""
 
     def __init__(self, prepare: Callable | None, study: Study, records: dict):
         self._prepare, self._args = prepare, (study, records)
@@ -569,9 +571,11 @@ class _Prepared:
             self._error = exc
 
     def start(self) -> None:
-        """Start the thread (once; nothing without ``prepare``)."""
+        """Start the thread (once; nothing without ``prepare``), in a copy of this thread's
+        context (``allow_unusual_walls()`` and the like hold there too)."""
         if self._prepare is not None and self._thread is None:
-            self._thread = threading.Thread(target=self._work, name="urmx-prepare",
+            self._thread = threading.Thread(target=contextvars.copy_context().run,
+                                            args=(self._work,), name="urmx-prepare",
                                             daemon=True)
             self._thread.start()
 

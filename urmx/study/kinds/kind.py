@@ -31,8 +31,6 @@ class Kind:
     counts: Callable[[Any], dict[str, int] | None] | None = None
     keys: tuple[str, ...] = ()  # the keys of its [study.<table>] (docs/study-files.md)
     warm_up: Callable[[], None] | None = None  # loads its integrator (the kernel's warm_up)
-    #: what assemble needs of the study and records alone, computed while the cells run
-    prepare: Callable[[Any, dict], Any] | None = None
     dt_above: float = 0.0  # a record's time step must exceed it (its integrator's window)
     #: the dimension along which each cell depends on the cell before it (the IDA kinds'
     #: ``wall``: a warm-started capacity search); None: independent cells
@@ -41,6 +39,8 @@ class Kind:
     chain_tag: Any = None
     #: the outputs of a cell its successor in the chain needs (`urmx.study.batches.Batch`)
     chained: tuple[str, ...] = ()
+    #: what assemble needs of the study and records alone, computed while the cells run
+    prepare: Callable[[Any, dict], Any] | None = None
 
     def cell_dims(self, study: Any) -> dict[str, list]:
         """The kind's cell dimensions of `study` (``dims``, default ``study.dims``)."""

@@ -93,7 +93,7 @@ def chain_extents(shape: tuple[int, ...], batch_size: int, axis: int) -> tuple[i
     """Block lengths as :func:`extents`, with dimension `axis` (a chain) always whole: the
     other dimensions cut to about ``batch_size / shape[axis]`` cells a block, the number of
     chains rounded to the nearest (at least one: 16 cells of 9-cell chains make blocks of 2
-    chains, 18 cells, not 1; a block of a few capacity searches cost the cluster more in
+    chains, 18 cells, not 1; a block of a few heavy cells cost the cluster more in
     messages and parts than in work)."""
     rest = list(shape)
     rest[axis] = 1

@@ -196,7 +196,6 @@ class Tables:
         # `like`: the same wall's tables at another record step, whose parts that do not
         # depend on the step (geometry, piece matrices, release rows, eigenvalues) are
         # copied, not computed again: the same numbers
-        self._like = like
         self.geo = tuple(a.copy() for a in like.geo) if like is not None else geometry(P)
         self.ready = np.zeros(NPIECE, np.bool_)
         self.nsub = np.ones(NPIECE, np.int64)
@@ -219,8 +218,7 @@ class Tables:
         # resistance on each signed branch, R = k*theta + r0, per case
         self._branch = {c: np.array([branch_coeffs(P, c, b) for b in range(-2, 3)])
                         for c in (1, 2, 3)}
-        self.build(_reachable(P))
-        self._like = None  # (pieces added later are computed)
+        self.build(_reachable(P), like)  # (pieces added later are computed)
         self.work = (
             np.zeros((KMAX, NP)), np.zeros(KMAX), np.zeros(N_IST, np.int64),
             np.zeros((MAX_EV, NP)), np.zeros((MAX_EV, NP)), np.zeros(MAX_EV),
@@ -265,15 +263,15 @@ class Tables:
             return out
         return Minv @ (T.T @ self._Mf[fam][:, 2])
 
-    def build(self, keys) -> None:
-        """Fill the tables of the given pieces (h, fam, bl, bu, bla)."""
+    def build(self, keys, like: Tables | None = None) -> None:
+        """Fill the tables of the given pieces (h, fam, bl, bu, bla); those `like` (the same
+        wall's tables at another step) has ready are copied from it but the propagators."""
         GMI = self.geo[3]
         groups: dict[tuple[int, int], list] = {}
         for key in keys:
             if not self.ready[piece_index(*key)]:
                 groups.setdefault(key[:2], []).append(key)
         by_size: dict[int, list] = {}
-        like = self._like
         for (h, fam), ks in groups.items():
             ny = self._T[h].shape[1]
             mids = np.array([piece_index(*k) for k in ks])

@@ -47,7 +47,7 @@ def _same(a: dict, b: dict) -> bool:
 
 
 def _object(cache: Path) -> Path:
-    (meta,) = cache.glob("urmx-numba-*/march-*.json")
+    (meta,) = cache.glob("urmx-numba-*/march-????????????.json")  # (not march-capacity)
     return meta.with_name(json.loads(meta.read_text())["object"])
 
 
@@ -55,6 +55,9 @@ def _object(cache: Path) -> Path:
 def test_compiled_once_then_loaded_without_numba_with_equal_results(tmp_path):
     first, err = _run(tmp_path)
     assert "compiling the kernel" in err and "kernel compiled in" in err
+    # a full-tracking analysis compiles its own loop, not the capacity searches' one
+    assert "march-capacity" not in err and err.count("kernel compiled in") == 1
+    assert not list(tmp_path.glob("urmx-numba-*/march-capacity-*"))
     assert "numba" in first["imported"]  # the cold process compiled it
     obj = _object(tmp_path)
     assert obj.stat().st_size > 10_000
@@ -189,16 +192,17 @@ ag = 3.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t / 4.0)
 first = kernel.run(wall, ag, 0.01, max_log=50)
 # the loop compiled again in the same process: numba has it, so the object is emitted
 # again from its optimised module (which holds the shim), a second code generation
-again = native._compile(native._FUNCTION_LAYOUT, kernel.loop.LOOP, None)
+layout = native._FUNCTIONS["march"][0]
+again = native._compile(layout, kernel.loop.LOOP, None)
 kernel.clear_cache()
-native._FUNCTION = again
+native._FUNCTIONS["march"] = (layout, again)
 second = kernel.run(wall, ag, 0.01, max_log=50)
 def text(res):
     return json.dumps({k: v.tolist() if isinstance(v, np.ndarray) else v
                        for k, v in res.items()}, sort_keys=True, default=float)
 out = {"made": [type(m).__name__ for m in made], "size": len(made[0]),
        "same": text(first) == text(second), "events": first["events"],
-       "called": kernel.tables(wall, 0.01).args._fn is again}
+       "called": kernel.tables(wall, 0.01).args._fns["march"] is again}
 print(json.dumps(out))
 """
 
@@ -219,3 +223,19 @@ def test_the_object_numba_makes_with_the_shim_gives_the_results_of_one_emitted_a
     assert out["made"] == ["bytes", "NoneType"]  # the first compile took numba's object
     assert out["size"] > 10_000 and out["events"] > 10
     assert out["same"] and out["called"]
+
+
+def test_a_capacity_search_runs_the_loop_with_the_runs_of_plain_steps_and_others_not():
+    """Two native objects of one loop: ``march-capacity`` (``_march`` with its runs of
+    plain steps, SLP-vectorised) for ``track="capacity"``, and ``march`` (the same code with
+    the runs replaced by a function that takes none) for everything else."""
+    from urmx.kernel import loop
+
+    full, capacity = loop.LOOPS
+    assert (full.name, capacity.name) == ("march", "march-capacity")
+    assert capacity.vectorize == loop.PLAIN_RUNS and full.vectorize == ()
+    assert capacity.function.py_func is loop._march.py_func
+    code = full.function.dispatcher.py_func
+    assert code.__code__ is loop._march.py_func.__code__ and code.__name__ == "_march_full"
+    assert code.__globals__["_plain_2"] is code.__globals__["_plain_3"] is loop._no_plain
+    assert loop._march.py_func.__globals__["_plain_2"] is loop._plain_2

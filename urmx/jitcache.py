@@ -31,6 +31,7 @@ import os
 import shutil
 import sys
 import threading
+import types
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -253,6 +254,41 @@ def jit(**options):
         _LAZY.append(lazy)
         return lazy
     return decorate
+
+
+class Variant:
+    """A marked function compiled with some of the compiled functions it calls replaced:
+    its code with other module globals, for a second, specialised native object (the
+    kernel's loop without the plain-step runs that only a capacity search uses).
+
+    ``lazy`` is a :class:`Lazy` (or numba's dispatcher); ``replace`` maps global names of
+    its module to marked functions. The dispatcher (:attr:`dispatcher`, named ``name``) is
+    made on first use, from the module's globals as :func:`materialize` left them."""
+
+    def __init__(self, lazy, name: str, **replace):
+        self.lazy, self.name, self.replace = lazy, name, replace
+        self._dispatcher = None
+
+    @property
+    def dispatcher(self):
+        if self._dispatcher is None:
+            materialize()
+            with _LOCK:
+                if self._dispatcher is None:
+                    py = self.lazy.py_func
+                    space = dict(vars(sys.modules[py.__module__]))
+                    space.update({k: getattr(f, "dispatcher", None) or f
+                                  for k, f in self.replace.items()})
+                    func = types.FunctionType(py.__code__, space, self.name, py.__defaults__,
+                                              py.__closure__)
+                    func.__qualname__ = self.name
+                    func.__doc__ = py.__doc__
+                    self._dispatcher = _dispatcher(func, self.lazy.options if isinstance(
+                        self.lazy, Lazy) else self.lazy.targetoptions)
+        return self._dispatcher
+
+    def __repr__(self) -> str:
+        return f"<urmx.jitcache.Variant {self.name} of {self.lazy.__qualname__}>"
 
 
 def materialize() -> None:

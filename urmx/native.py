@@ -57,6 +57,7 @@ class Loop(NamedTuple):
     reals: tuple
     flags: tuple = ()
     vectorize: tuple = ()
+    name: str = "march"  # its native object's name in the cache folder
 
 
 class Args:
@@ -90,7 +91,7 @@ class Args:
         if self.layout[self._index[record]][2] != 1:
             raise ValueError("the record must be a 1-D array")
         self.lock = threading.Lock()
-        self._fn = None
+        self._fns: dict = {}  # loop name: its native function
         self._ret = ctypes.c_int64(0)
         self._exc = ctypes.c_void_p(0)
         self._ptrs = (ctypes.addressof(self._ret), ctypes.addressof(self._exc),
@@ -114,13 +115,14 @@ class Args:
     def __getitem__(self, name: str) -> np.ndarray:
         return self._arrays[name]
 
-    def run(self, record: np.ndarray, ints, reals) -> int:
-        """Run the loop on the record (a C-contiguous float64 array, as
-        :func:`urmx.kernel.run` makes it), the integer arguments and the real ones after dt;
-        returns its status code."""
-        fn = self._fn
+    def run(self, record: np.ndarray, ints, reals, loop: Loop | None = None) -> int:
+        """Run the loop (:attr:`loop`, or another one of the same arguments) on the record
+        (a C-contiguous float64 array, as :func:`urmx.kernel.run` makes it), the integer
+        arguments and the real ones after dt; returns its status code."""
+        loop = loop or self.loop
+        fn = self._fns.get(loop.name)
         if fn is None:
-            fn = self._fn = function(self.layout, self.loop)
+            fn = self._fns[loop.name] = function(self.layout, loop)
         iv, at = self.iv, self._record_at
         iv[at] = _address(record)
         iv[at + 1] = record.shape[0]  # (the caller keeps the record alive during the run)
@@ -137,8 +139,7 @@ class Args:
 
 # ---- loading or compiling the native loop ----------------------------------------------
 
-_FUNCTION = None
-_FUNCTION_LAYOUT = None
+_FUNCTIONS: dict = {}  # loop name: (layout, the loaded function)
 _KEEP: list = []  # the MCJIT engines behind the loaded functions
 _LOCK = threading.Lock()
 _PROTO = ctypes.PYFUNCTYPE(ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p,
@@ -146,15 +147,17 @@ _PROTO = ctypes.PYFUNCTYPE(ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p,
 
 
 def function(layout, loop: Loop):
-    """The native loop for an array layout: loaded from the cache, else compiled."""
-    global _FUNCTION, _FUNCTION_LAYOUT
-    if _FUNCTION is None or _FUNCTION_LAYOUT != layout:
+    """The native loop for an array layout: loaded from the cache, else compiled (each
+    loop, by its name, once a process)."""
+    known = _FUNCTIONS.get(loop.name)
+    if known is None or known[0] != layout:
         with _LOCK:
-            if _FUNCTION is None or _FUNCTION_LAYOUT != layout:
-                meta_path = description_path()
-                _FUNCTION = _load(layout, meta_path) or _compile(layout, loop, meta_path)
-                _FUNCTION_LAYOUT = layout
-    return _FUNCTION
+            known = _FUNCTIONS.get(loop.name)
+            if known is None or known[0] != layout:
+                meta_path = description_path(loop.name)
+                fn = _load(layout, meta_path) or _compile(layout, loop, meta_path)
+                known = _FUNCTIONS[loop.name] = (layout, fn)
+    return known[1]
 
 
 def _llvm():
@@ -175,13 +178,13 @@ def _cpu_key(ll) -> str:
     return h.hexdigest()[:12]
 
 
-def description_path() -> Path | None:
-    """The JSON description of the native loop for this source and CPU, which names its
-    object file (None: no writable cache folder)."""
+def description_path(name: str = "march") -> Path | None:
+    """The JSON description of the native loop `name` for this source and CPU, which names
+    its object file (None: no writable cache folder)."""
     folder = jitcache.cache_dir()
     if folder is None:
         return None
-    return folder / f"march-{_cpu_key(_llvm())}.json"
+    return folder / f"{name}-{_cpu_key(_llvm())}.json"
 
 
 def _load(layout, meta_path: Path | None):
@@ -223,8 +226,8 @@ _DTYPES = {"<f8": ("float64", 8), "<i8": ("int64", 8), "|b1": ("boolean", 1)}
 
 def _compile(layout, loop: Loop, meta_path: Path | None):
     where = meta_path.parent if meta_path else "nowhere: no writable cache folder"
-    sys.stderr.write(f"urmx: compiling the kernel (once per install; cached in {where}) "
-                     "...\n")
+    what = "the kernel" if loop.name == "march" else f"the kernel's {loop.name} loop"
+    sys.stderr.write(f"urmx: compiling {what} (once per install; cached in {where}) ...\n")
     sys.stderr.flush()
     started = time.perf_counter()
     jitcache.materialize()

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernel import run as kernel
-from ..kernel import warm_up as warm_kernel
+from ..kernel import warm_up_capacity as warm_kernel
 from ..model import Wall
 from ..records.measures import dominant_frequency
 from ..records.record import Record, as_record

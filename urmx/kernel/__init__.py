@@ -114,6 +114,7 @@ from .loop import (
     EVENT_NAMES,
     EVENT_SPAN,
     LAWS,
+    LOOPS,
     MAX_EVENTS,
     MAX_SUBSTEPS,
     O_BASE_IMP,
@@ -153,7 +154,7 @@ __all__ = [
     "MAX_EVENTS", "MAX_SUBSTEPS", "STATUS", "ST_COLLAPSED", "ST_EVENT_LIMIT",
     "ST_NEED_PIECE", "ST_OK", "TRACKS", "T_REST", "Tables", "UNTRACKED", "WINDOW",
     "check_inputs", "check_t_rest", "check_track",
-    "clear_cache", "history_dict", "run", "scalars", "tables", "warm_up",
+    "clear_cache", "history_dict", "run", "scalars", "tables", "warm_up", "warm_up_capacity",
 ]
 
 
@@ -256,7 +257,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
     """
     ag, dt, ntail, law = check_inputs(wall, ground_acceleration, dt, scale, cor, impact, tail,
                                       window, t_rest)
-    capacity = check_track(track) == "capacity"
+    capacity = check_track(track) == "capacity"  # (two native loops, each compiled once)
     tab = tables(wall, dt)
     n = tab.nfull
     args = tab.args
@@ -271,7 +272,7 @@ def run(wall: Wall, ground_acceleration, dt: float, *, scale: float = 1.0, cor: 
                 args.put("evlog", evlog)
             while True:
                 status = args.run(ag, (ntail, law, int(history), int(capacity)),
-                                  (cor, window, float(t_rest)))
+                                  (cor, window, float(t_rest)), LOOPS[capacity])
                 if status != ST_NEED_PIECE:
                     break
                 # a piece not foreseen as reachable: add it, run again
@@ -307,11 +308,18 @@ def history_dict(hist: np.ndarray, dt: float, n: int) -> dict:
 
 
 
-def warm_up() -> None:
-    """Compile the kernel (or load it from the on-disk cache) with a tiny analysis.
+def warm_up(track: str = "all") -> None:
+    """Compile the kernel for a tracking mode (or load it from the on-disk cache) with a
+    tiny analysis: ``"all"`` and ``"capacity"`` run two native loops (the capacity one has
+    the runs of plain steps compiled in).
 
     Called before local worker processes start, so that they load the compiled kernel
     from the cache instead of each compiling it on the same cores."""
     wall = Wall(0.2, 2.0, 0.5, 100.0, top_mass=10.0, top_stiffness=1e5)
-    run(wall, np.array([0.0, 1.0, 0.0]), 0.01, impact="contact")
+    run(wall, np.array([0.0, 1.0, 0.0]), 0.01, impact="contact", track=track)
+
+
+def warm_up_capacity() -> None:
+    """:func:`warm_up` of the capacity loop (what a collapse-capacity study's workers run)."""
+    warm_up("capacity")
 

@@ -1504,6 +1504,14 @@ _plain_3 = _plain_run(NP)
 PLAIN_RUNS = ("_plain_2", "_plain_3")  # compiled with the SLP vectorizer (native.Loop)
 
 
+@inline
+def _no_plain(ag, step, nsteps, N, dt, inv_dt, beta_prev, fam1, fam1_time, E, PV, RT, KP,
+              TR, r, v, e_a, ed_a, val_a, der_a, peaks, rb, vb, e_b, ed_b):
+    """No run of plain steps (the loop :data:`LOOP` has no capacity loop compiled in):
+    the general loop takes every step."""
+    return step, 0, fam1_time, beta_prev, False
+
+
 @inner
 def record_row(hist, k, L, N, ist, r, v, val, nfull):
     """One row of the histories: tilts, displacements, accelerations, pattern and the
@@ -1889,9 +1897,16 @@ def _march(P, ag, dt, ntail, cor, law, window, t_rest, geo, pieces, work, peaks,
     return status
 
 
-# the loop as urmx.native compiles and calls it
-LOOP = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",),
-                   vectorize=PLAIN_RUNS)
+# the loop as urmx.native compiles and calls it, as two native objects, each compiled on
+# first use: LOOP_CAPACITY, with the runs of plain steps of a capacity search, and LOOP,
+# _march without them, for every other analysis (the runs cost about 5 s of first compile,
+# and a full-tracking analysis never enters them)
+LOOP_CAPACITY = native.Loop(_march, LOOP_ARGS, INTS, REALS, flags=("want_hist",),
+                            vectorize=PLAIN_RUNS, name="march-capacity")
+LOOP = native.Loop(jitcache.Variant(_march, "_march_full", _plain_2=_no_plain,
+                                    _plain_3=_no_plain),
+                   LOOP_ARGS, INTS, REALS, flags=("want_hist",), name="march")
+LOOPS = (LOOP, LOOP_CAPACITY)  # by capacity (False, True)
 
 
 # The event semantics as the scipy reference solver calls them from Python: the same

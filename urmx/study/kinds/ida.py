@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ... import fragility, variables
-from ...kernel import WINDOW, warm_up
+from ...kernel import WINDOW, warm_up_capacity
 from ...kernel import run as run_kernel
 from ...netcdf import INT_FILL
 from ...records.measures import dominant_frequency
@@ -469,6 +469,6 @@ def counts(ds: xr.Dataset) -> dict[str, int] | None:
 KIND = Kind(name="ida", table="ida", unit="cells", outputs=OUTPUTS, parse=parse, dims=dims,
             task=task, run=run_batch, assemble=assemble, reopen=reopen, archived=ARCHIVED,
             cell_bytes=cell_bytes, counts=counts, keys=KEYS,
-            warm_up=warm_up, prepare=_record_measures, dt_above=WINDOW, chain="wall",
+            warm_up=warm_up_capacity, prepare=_record_measures, dt_above=WINDOW, chain="wall",
             chain_tag=CHAIN_TAG,
             chained=("capacity", "unit"))

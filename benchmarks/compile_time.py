@@ -125,7 +125,9 @@ def render(d: dict) -> list[str]:
         "once per literal constant they are called with (`urmx.jitcache`), and the loop "
         "with its shim is compiled to machine code once, not twice (`urmx.native`), which "
         "took 18.4 s to 13.9 s of CPU on 2026-11-27; the runs of plain steps of capacity "
-        "searches added since (two generated functions, about 5 s) took most of it back. "
+        "searches added since (two generated functions, about 5 s) live in a second native "
+        "object (`march-capacity`), compiled on a first capacity search only, so the first "
+        "analysis here does not compile them. "
         "The first analysis' peaks are " + ("bit for bit equal." if d["same_peaks"] else
                                             "**not** equal between the two trees."),
         "",

@@ -544,7 +544,10 @@ WHY = [
     "trackers with accelerations, ran 0.93x as fast with a loop of this kind (and 0.96x "
     "with one in the code, unused: the loop's own code grew), so the benchmark targets "
     "stay missed. The cost: the first compile takes about 5 s more CPU (two functions of "
-    "216 and 264 generated lines, about 2 s each in numba's front end and lowering). What "
+    "216 and 264 generated lines, about 2 s each in numba's front end and lowering), so "
+    "they are compiled into a native object of their own (`march-capacity`, the loop with "
+    "the runs; `march`, the same code without them, serves every other analysis), each "
+    "compiled on first use: a first full analysis compiles as it did before the runs. What "
     "is left for the benchmark targets changes results at the round-off level and must "
     "then be judged on the pinned archives (a chaotic cell moves with any ulp): a cheaper "
     "root finder or polish, or a series reused across an impact.",

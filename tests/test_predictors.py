@@ -206,3 +206,23 @@ def test_bad_geometry_tables_are_refused(params, extra, key):
     with pytest.raises(ParameterError) as exc:
         _sampling(params, **extra)
     assert exc.value.key == key
+
+
+def test_a_frequency_bin_no_replicate_fills_has_no_interval_and_no_warning():
+    """A bin of the frequency ratio that no cell falls in (here the last two) has a NaN mean
+    and a NaN interval, which the report shows as "-", and says nothing on stderr (numpy's
+    all-NaN warning is not the user's business); the filled bins keep finite intervals."""
+    import warnings
+
+    from urmx.analysis.predictors import _resonance_boot
+
+    rng = np.random.default_rng(3)
+    walls, recs = np.repeat(np.arange(6), 5), np.tile(np.arange(5), 6)
+    cells = {"e": rng.normal(0.0, 0.3, 30), "x": rng.uniform(-1.0, 0.9, 30),
+             "s": rng.normal(0.5, 0.2, 30), "record": recs, "wall": walls}
+    edges = np.array([-1.0, 0.0, 1.0, 2.0, 3.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = _resonance_boot(cells, edges, 50, 1)
+    assert np.isfinite(out["lower"][:2]).all() and np.isnan(out["lower"][2:]).all()
+    assert (out["lower"][:2] <= out["upper"][:2]).all() and np.isnan(out["upper"][2:]).all()

@@ -18,6 +18,7 @@ The report (`urmx.reports.predictors`) draws and writes them.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numpy as np
@@ -247,7 +248,9 @@ def _resonance_boot(c: dict[str, np.ndarray], edges: np.ndarray, replicates: int
         slopes.append(st["slope"])
         withins.append(st["slope_within"])
     q = [0.025, 0.975]
-    lo, hi = np.nanquantile(np.array(means), q, axis=0)
+    with warnings.catch_warnings():  # a bin no replicate fills has no interval (NaN: "-")
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lo, hi = np.nanquantile(np.array(means), q, axis=0)
     return {"lower": lo, "upper": hi, "factor_interval": tuple(np.quantile(factors, q)),
             "factor_adjusted_interval": tuple(np.quantile(adjusted, q)),
             "slope_interval": tuple(np.quantile(slopes, q)),

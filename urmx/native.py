@@ -14,6 +14,10 @@ uses this CPU's instruction set). Every process, the compiling one included, loa
 object with llvmlite's MCJIT (a few ms) and calls the shim through ctypes: a warm process
 never imports numba, whose import and cache loading cost about 0.8 s a process.
 
+Each loop is named (:attr:`Loop.name`) and is its own object, compiled on its first call:
+the kernel keeps two of the same arguments, ``march`` and ``march-capacity``
+(:data:`urmx.kernel.loop.LOOPS`), and :meth:`Args.run` takes either.
+
 Before an object is loaded its SHA-256 and the array layout it was compiled for are
 checked against the JSON file that names it (written after the object, which is named by
 its checksum, so a write cut short or a concurrent one leaves no mismatched pair); a

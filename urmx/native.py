@@ -182,7 +182,7 @@ def _cpu_key(ll) -> str:
     return h.hexdigest()[:12]
 
 
-def description_path(name: str = "march") -> Path | None:
+def description_path(name: str) -> Path | None:
     """The JSON description of the native loop `name` for this source and CPU, which names
     its object file (None: no writable cache folder)."""
     folder = jitcache.cache_dir()

@@ -43,3 +43,23 @@ def test_a_missing_shared_folder_fails_under_ci(monkeypatch, tmp_path):
     monkeypatch.setenv("CI", "")
     with pytest.raises(pytest.skip.Exception, match="shared records folder"):
         record_file("elcentro.dat")
+
+
+def test_a_file_of_the_records_in_use_is_found_there_and_its_absence_is_said(monkeypatch,
+                                                                              tmp_path):
+    """`records_file` reads the records folder in use (``$URMX_RECORDS``, else the shipped
+    records, which hold the FEMA P695 library: no shared folder is needed for it); a file
+    missing there fails under CI and skips elsewhere."""
+    from .fixtures.records import records_file
+
+    monkeypatch.delenv("URMX_RECORDS", raising=False)
+    shipped = records_file("library/catalog.tsv")
+    assert shipped == records_folder() / "library" / "catalog.tsv" and shipped.is_file()
+    (tmp_path / "manifest.toml").write_text("", encoding="utf-8")
+    monkeypatch.setenv("URMX_RECORDS", str(tmp_path))
+    monkeypatch.setenv("CI", "true")
+    with pytest.raises(pytest.fail.Exception, match="catalog.tsv is missing.*CI is set"):
+        records_file("library/catalog.tsv")
+    monkeypatch.setenv("CI", "")
+    with pytest.raises(pytest.skip.Exception, match="missing from the records folder"):
+        records_file("library/catalog.tsv")

@@ -31,7 +31,7 @@ from urmx.catalog import CatalogError
 from urmx.model import RIGID, Wall
 from urmx.study.file import load_study
 
-from .fixtures.records import record_file
+from .fixtures.records import records_file
 from .fixtures.signals import interruptible
 from .helpers.ida_study import (
     ACC,
@@ -51,7 +51,7 @@ from .helpers.ida_study import (
 def library(records_dir) -> Path:
     """The records folder with the FEMA P695 far-field library (fails under CI, skips
     elsewhere when it is missing)."""
-    record_file("library/catalog.tsv")
+    records_file("library/catalog.tsv")
     return records_dir
 
 

@@ -9,14 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from .fixtures.records import record_file
+from .fixtures.records import record_file, records_file
 
 NOTEBOOK = Path(__file__).resolve().parent.parent / "docs" / "fragility.ipynb"
 OWN_STUDY = NOTEBOOK.parent / "own-study.ipynb"
 
 
 def test_fragility_notebook_runs(records_dir, tmp_path, monkeypatch):
-    record_file("library/catalog.tsv")  # the FEMA P695 library the notebook's grid uses
+    records_file("library/catalog.tsv")  # the FEMA P695 library the notebook's grid uses
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     monkeypatch.setenv("URMX_RECORDS", str(records_dir))
@@ -99,7 +99,7 @@ def test_own_study_notebook_runs(shared_records, tmp_path, monkeypatch):
 def test_predictors_notebook_runs(records_dir, tmp_path, monkeypatch):
     """docs/predictors.ipynb (issue 37) on its small wall population: the design, one
     wall's predictors, the run, the ranking, the report and urmx_rule."""
-    record_file("library/catalog.tsv")
+    records_file("library/catalog.tsv")
     nb, joined = _execute(NOTEBOOK.parent / "predictors.ipynb", records_dir, tmp_path,
                           monkeypatch)
     assert "walls drawn: 40" in joined and "h/t <= 35: True" in joined

@@ -96,9 +96,9 @@ im = "sa_wall"
 
 
 def test_ida_archive(records_dir, make_study, tmp_path):
-    from .fixtures.records import record_file
+    from .fixtures.records import records_file
 
-    record_file("library/catalog.tsv")
+    records_file("library/catalog.tsv")
     out = tmp_path / "ida.nc"
     run_study(make_study(IDA_STUDY, "ida.toml"), out=out, scheduler="serial", progress=False,
               records_dir=records_dir)

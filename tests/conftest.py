@@ -11,7 +11,7 @@ import pytest
 import urmx
 from urmx.guard import benchmark_wall
 
-from .fixtures import studies
+from .fixtures import compiled, studies
 from .fixtures.records import records_folder, shared_folder
 
 
@@ -125,3 +125,11 @@ def ida_records(use_records):
 
     use_records(G.ACC, G.SCALE, G.DT)
     G.CALLS.clear()
+
+
+@pytest.fixture(scope="session")
+def cold_kernel(tmp_path_factory) -> compiled.ColdCompile:
+    """The suite's one cold compile of the kernel's loop, in a new process with an empty
+    ``NUMBA_CACHE_DIR`` (`tests.fixtures.compiled`): tests that change its cache folder
+    work on a copy (``compiled.copy_cache``)."""
+    return compiled.cold_compile(tmp_path_factory.mktemp("numba-cold"))

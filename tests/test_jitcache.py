@@ -19,6 +19,8 @@ import pytest
 
 import urmx
 
+from .fixtures import compiled
+
 SCRIPT = r"""
 import json, sys
 import numpy as np
@@ -38,9 +40,8 @@ PEAKS = ("peak_crack_displacement", "peak_top_displacement", "peak_top_accelerat
          "instability_ratio_lower", "instability_ratio_upper", "unfavourable_fraction")
 
 
-def _run(src: Path, *args: str) -> tuple[dict, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_CACHE")}
-    env["PYTHONPATH"] = str(src)
+def _run(src: Path, cache: Path, *args: str) -> tuple[dict, str]:
+    env = dict(os.environ, PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(cache))
     proc = subprocess.run([sys.executable, "-c", SCRIPT, *args], capture_output=True,
                           text=True, env=env, cwd=src, timeout=900)
     assert proc.returncode == 0, proc.stderr
@@ -48,16 +49,18 @@ def _run(src: Path, *args: str) -> tuple[dict, str]:
 
 
 @pytest.mark.slow
-def test_changed_model_is_picked_up_without_clearing_any_cache(tmp_path):
+def test_changed_model_is_picked_up_without_clearing_any_cache(cold_kernel, tmp_path):
+    """A copy of the package elsewhere loads the kernel another process compiled from the
+    same sources (the cache is keyed on their contents; `tests.fixtures.compiled`: the
+    suite's one cold compile, copied), and after an edit of model.py compiles anew, into
+    the same cache, and runs the new physics."""
     src = tmp_path / "src"
     shutil.copytree(Path(urmx.__file__).parent, src / "urmx",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    first, err = _run(src)
+    cache = compiled.copy_cache(cold_kernel, tmp_path / "cache")
+    first, err = _run(src, cache)
     assert first["file"].startswith(str(src))
-    assert "compiling the kernel" in err
-    again, err = _run(src)
-    assert "compiling the kernel" not in err  # the cache works: loaded, not compiled
-    assert again["kernel"] == first["kernel"]
+    assert "compiling the kernel" not in err  # the same sources: loaded, not compiled
     # a change of physics in a compiled function of model.py, which the kernel's compiled
     # code calls: family 1 now takes the lower segment's Case 2 curve too
     model = src / "urmx" / "model.py"
@@ -65,8 +68,8 @@ def test_changed_model_is_picked_up_without_clearing_any_cache(tmp_path):
     old = '    return 3 if family == 1 else 2\n'
     assert text.count(old) == 1
     model.write_text(text.replace(old, '    return 2\n'))
-    edited, err = _run(src, "reference")
-    assert "compiling the kernel" in err
+    edited, err = _run(src, cache, "reference")
+    assert "compiling the kernel" in err  # nothing cleared: a new source, a new compile
     before, after = first["kernel"], edited["kernel"]
     assert any(before[k] != after[k] for k in PEAKS)
     # the new physics throughout: the reference solver (fresh compiled event functions of
@@ -74,6 +77,12 @@ def test_changed_model_is_picked_up_without_clearing_any_cache(tmp_path):
     ref = edited["reference"]
     for k in PEAKS[:-1]:
         assert after[k] == pytest.approx(ref[k], rel=1e-8), k
+    again, err = _run(src, cache)
+    assert "compiling the kernel" not in err and again["kernel"] == after  # cached too
+    restored = src / "urmx" / "model.py"
+    restored.write_text(text)
+    back, err = _run(src, cache)
+    assert "compiling the kernel" not in err and back["kernel"] == before  # both kept
 
 
 HELPERS = '''

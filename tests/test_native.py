@@ -4,9 +4,6 @@ processes without numba, with the same results; a damaged object is never run.""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 import threading
 from pathlib import Path
 
@@ -16,28 +13,7 @@ import pytest
 import urmx
 from urmx import kernel, native
 
-SCRIPT = r"""
-import json, sys
-import numpy as np
-import urmx
-from urmx import kernel
-wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
-                 top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
-t = np.arange(1501) * 0.01
-ag = 3.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t / 4.0)
-res = kernel.run(wall, ag, 0.01, max_log=50)
-res["event_log"] = res["event_log"].tolist()
-mods = sorted({m.split(".")[0] for m in sys.modules} & {"numba", "scipy", "xarray", "dask"})
-print(json.dumps({"result": res, "imported": mods}, default=float))
-"""
-
-
-def _run(cache: Path) -> tuple[dict, str]:
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-    proc = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True,
-                          env=env, timeout=900)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
+from .fixtures import compiled
 
 
 def _same(a: dict, b: dict) -> bool:
@@ -52,16 +28,17 @@ def _object(cache: Path) -> Path:
 
 
 @pytest.mark.slow
-def test_compiled_once_then_loaded_without_numba_with_equal_results(tmp_path):
-    first, err = _run(tmp_path)
+def test_compiled_once_then_loaded_without_numba_with_equal_results(cold_kernel, tmp_path):
+    first, err = cold_kernel.out, cold_kernel.err  # (the suite's one cold compile)
     assert "compiling the kernel" in err and "kernel compiled in" in err
     # a full-tracking analysis compiles its own loop, not the capacity searches' one
     assert "march-capacity" not in err and err.count("kernel compiled in") == 1
-    assert not list(tmp_path.glob("urmx-numba-*/march-capacity-*"))
+    assert not list(cold_kernel.cache.glob("urmx-numba-*/march-capacity-*"))
     assert "numba" in first["imported"]  # the cold process compiled it
-    obj = _object(tmp_path)
+    cache = compiled.copy_cache(cold_kernel, tmp_path / "cache")
+    obj = _object(cache)
     assert obj.stat().st_size > 10_000
-    again, err = _run(tmp_path)
+    again, err = compiled.run(cache)
     assert err == ""  # nothing compiled, nothing said
     assert again["imported"] == []  # the warm process never imports numba
     assert _same(again["result"], first["result"])  # bit for bit, event log included
@@ -70,10 +47,10 @@ def test_compiled_once_then_loaded_without_numba_with_equal_results(tmp_path):
     data = bytearray(obj.read_bytes())
     data[len(data) // 2] ^= 0xFF
     obj.write_bytes(bytes(data))
-    damaged, err = _run(tmp_path)
+    damaged, err = compiled.run(cache)
     assert "is unusable (its checksum does not match); compiling it again" in err
     assert _same(damaged["result"], first["result"])
-    healed, err = _run(tmp_path)
+    healed, err = compiled.run(cache)
     assert err == "" and _same(healed["result"], first["result"])
 
 
@@ -177,51 +154,17 @@ def test_the_shim_refuses_a_loop_numba_passes_otherwise():
         native._shim(layout, missing, compiled)
 
 
-SHIM_SCRIPT = r"""
-import json, sys
-import numpy as np
-import urmx
-from urmx import kernel, native
-made = []
-with_shim = native._compile_with_shim
-native._compile_with_shim = lambda *args: made.append(with_shim(*args)) or made[-1]
-wall = urmx.Wall(thickness=0.23, height=4.14, crack_ratio=2 / 3, mass=30000.0,
-                 top_stiffness=815e3, top_mass=20000.0, top_damping=0.12)
-t = np.arange(1501) * 0.01
-ag = 3.0 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t / 4.0)
-first = kernel.run(wall, ag, 0.01, max_log=50)
-# the loop compiled again in the same process: numba has it, so the object is emitted
-# again from its optimised module (which holds the shim), a second code generation
-layout = native._FUNCTIONS["march"][0]
-again = native._compile(layout, kernel.loop.LOOP, None)
-kernel.clear_cache()
-native._FUNCTIONS["march"] = (layout, again)
-second = kernel.run(wall, ag, 0.01, max_log=50)
-def text(res):
-    return json.dumps({k: v.tolist() if isinstance(v, np.ndarray) else v
-                       for k, v in res.items()}, sort_keys=True, default=float)
-out = {"made": [type(m).__name__ for m in made], "size": len(made[0]),
-       "same": text(first) == text(second), "events": first["events"],
-       "called": kernel.tables(wall, 0.01).args._fns["march"] is again}
-print(json.dumps(out))
-"""
-
-
 @pytest.mark.slow
 def test_the_object_numba_makes_with_the_shim_gives_the_results_of_one_emitted_again(
-        tmp_path):
+        cold_kernel):
     """The native object is what numba's JIT makes of the loop's module with the shim
     added before optimisation (one code generation); for a loop numba had compiled before
     in the process, the object is emitted again from its optimised module (a second code
     generation, as every compile did before). Both give the same results bit for bit,
-    event log included."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    proc = subprocess.run([sys.executable, "-c", SHIM_SCRIPT], capture_output=True,
-                          text=True, env=env, timeout=900)
-    assert proc.returncode == 0, proc.stderr
-    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    event log included (`tests.fixtures.compiled`: the suite's one cold process)."""
+    out = cold_kernel.out
     assert out["made"] == ["bytes", "NoneType"]  # the first compile took numba's object
-    assert out["size"] > 10_000 and out["events"] > 10
+    assert out["size"] > 10_000 and out["result"]["events"] > 10
     assert out["same"] and out["called"]
 
 

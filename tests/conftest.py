@@ -12,7 +12,7 @@ import urmx
 from urmx.guard import benchmark_wall
 
 from .fixtures import compiled, studies
-from .fixtures.records import records_folder, shared_folder
+from .fixtures.records import records_folder, samples_folder
 
 
 @pytest.fixture(scope="session")
@@ -24,11 +24,11 @@ def records_dir() -> Path:
 
 
 @pytest.fixture(scope="session")
-def shared_records() -> Path:
-    """The shared records folder with the format samples the repository does not ship
-    (``$URMX_RECORDS``, else ``shared/records`` beside the checkout); missing, it fails the
+def sample_records() -> Path:
+    """The records folder that holds the reader-format samples (the shipped records,
+    ``records/formats``; else ``$URMX_RECORDS`` if it does); missing, it fails the
     test under CI and skips it elsewhere."""
-    return shared_folder()
+    return samples_folder()
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ import pytest
 from urmx.config import shipped_records
 
 from .fixtures import records as fixture
-from .fixtures.records import record_file, records_folder, shared_folder
+from .fixtures.records import record_file, records_folder, samples_folder
 
 
 @pytest.mark.parametrize("ci", ["true", "1"])
@@ -32,17 +32,42 @@ def test_missing_records_skip_elsewhere(monkeypatch, tmp_path, ci):
         records_folder()
 
 
-def test_a_missing_shared_folder_fails_under_ci(monkeypatch, tmp_path):
-    """The shared folder is found by its format samples; a folder without them (and no
-    shared folder beside the checkout) fails under CI, skips elsewhere."""
-    monkeypatch.setenv("URMX_RECORDS", str(tmp_path))
+def test_the_format_samples_are_found_in_the_shipped_records_and_their_absence_is_said(
+        monkeypatch, tmp_path):
+    """The format samples are shipped (``records/formats``): with no ``$URMX_RECORDS``, or
+    one that lacks them, they are found there, with nothing beside the checkout; a folder
+    whose marker sample is missing everywhere fails under CI and skips elsewhere."""
+    monkeypatch.delenv("URMX_RECORDS", raising=False)
+    assert samples_folder() == shipped_records()
+    assert record_file(fixture.MARKER) == shipped_records() / fixture.MARKER
+    monkeypatch.setenv("URMX_RECORDS", str(tmp_path))  # a folder of one's own, no samples
+    assert samples_folder() == shipped_records()
     monkeypatch.setattr(fixture, "MARKER", "no/such/sample.AT2")
     monkeypatch.setenv("CI", "true")
     with pytest.raises(pytest.fail.Exception, match="sample.AT2.*CI is set"):
-        shared_folder()
+        samples_folder()
     monkeypatch.setenv("CI", "")
-    with pytest.raises(pytest.skip.Exception, match="shared records folder"):
-        record_file("elcentro.dat")
+    with pytest.raises(pytest.skip.Exception, match="format samples are not found"):
+        samples_folder()
+
+
+def test_a_record_file_is_looked_for_in_the_users_folder_then_the_shipped_one(
+        monkeypatch, tmp_path):
+    """`record_file` takes a file from ``$URMX_RECORDS`` first (how a K-NET sample, which
+    is not shipped, reaches its tests), then from the shipped records; a file no folder
+    holds fails under CI and skips elsewhere, naming the folders it looked in."""
+    own = tmp_path / "formats" / "knet" / "SYN0010001010000.EW"
+    own.parent.mkdir(parents=True)
+    own.write_text("x", encoding="ascii")
+    monkeypatch.setenv("URMX_RECORDS", str(tmp_path))
+    assert record_file("formats/knet/SYN0010001010000.EW") == own
+    assert record_file(fixture.MARKER) == shipped_records() / fixture.MARKER
+    monkeypatch.setenv("CI", "true")
+    with pytest.raises(pytest.fail.Exception, match=r"no/such\.AT2 is not found in .*CI is set"):
+        record_file("no/such.AT2")
+    monkeypatch.setenv("CI", "")
+    with pytest.raises(pytest.skip.Exception, match=str(tmp_path)):
+        record_file("no/such.AT2")
 
 
 def test_a_file_of_the_records_in_use_is_found_there_and_its_absence_is_said(monkeypatch,

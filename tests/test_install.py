@@ -100,6 +100,8 @@ def test_the_wheel_carries_the_catalog_and_the_manifest(wheel):
     assert "urmx/_data/records/PROVENANCE.md" in names
     shipped = {f"urmx/_data/records/{e['file']}" for e in urmx.records.manifest().values()}
     assert len(shipped) == 47 and shipped <= names  # every record file of the manifest
+    assert "urmx/_data/records/formats/manifest.toml" in names  # and the format samples
+    assert "urmx/_data/records/formats/peer/RSN763_LOMAP_GIL067.AT2" in names
     assert "urmx/variables.toml" in names
     assert not any(n.startswith(("catalog/", "records/", "tests/", "benchmarks/"))
                    for n in names)
@@ -214,6 +216,8 @@ def test_what_needs_a_checkout_says_so_in_one_line(tmp_path, monkeypatch, capsys
 #: what the clone's test run is limited to (module docstring of the test below)
 QUICK_START_SUBSET = ("tests/test_fixtures.py "
                       "tests/test_records.py::test_shipped_records_are_the_manifests "
+                      "tests/test_records.py::test_shipped_format_samples_are_their_manifests "
+                      "tests/test_readers.py::test_describe_a_record_file "
                       "tests/test_records.py::test_load_paper_records "
                       "tests/test_records_checks.py::test_csv_with_a_header_row_reads_as_the_"
                       "bare_numbers")
@@ -248,9 +252,10 @@ def test_quick_start_from_a_clone(tmp_path):
     The second command runs the test suite, this test among it. Run whole, it would run
     the suite inside the suite (a recursion, and twice the CI time), so it runs here as
     written but with ``PYTEST_ADDOPTS`` naming a small subset (`QUICK_START_SUBSET`: the
-    fixtures' guard rails, the shipped records against their manifest and provenance,
-    loading the paper's records, a CSV read) that needs nothing but the clone; ``.ci/run``
-    runs the same command whole. pip uses its cache and the configured package index (no
+    fixtures' guard rails, the shipped records and format samples against their manifests
+    and provenance, a format sample described, loading the paper's records, a CSV read)
+    that needs nothing but the clone, and none of it skips; ``.ci/run`` runs the same
+    command whole. pip uses its cache and the configured package index (no
     other network is needed)."""
     clone = tmp_path / "empty" / "urmx"
     clone.parent.mkdir()
@@ -269,6 +274,7 @@ def test_quick_start_from_a_clone(tmp_path):
                               capture_output=True, text=True, timeout=3000)
         assert proc.returncode == 0, f"{command}\n{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}"
     assert " passed" in proc.stdout and "failed" not in proc.stdout
+    assert "skipped" not in proc.stdout  # the format samples, too, are in the clone
     status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True,
                             text=True, check=True).stdout
     assert status == "", status

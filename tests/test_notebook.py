@@ -58,13 +58,13 @@ def _execute(path: Path, records_dir, tmp_path, monkeypatch):
                          for o in outputs)
 
 
-def test_own_study_notebook_runs(shared_records, tmp_path, monkeypatch):
-    """The notebook reads two format samples (GeoNet V2A, PEER AT2) the repository does not
-    ship, so it runs on the shared records folder (`shared_records`: beside the checkout or
-    ``$URMX_RECORDS``), which holds them and the shipped ones alike."""
+def test_own_study_notebook_runs(sample_records, tmp_path, monkeypatch):
+    """The notebook reads two format samples (GeoNet V2A, PEER AT2) and a shipped record,
+    from the records folder that holds the samples (`sample_records`: the shipped
+    records)."""
     from urmx.provenance import attrs
 
-    records_dir = shared_records
+    records_dir = sample_records
 
     files = {"wtmc": "formats/geonet/20161113_110259_WTMC_20.V2A",
              "gilroy": "formats/peer/RSN763_LOMAP_GIL067.AT2",

@@ -360,9 +360,9 @@ def test_nan_in_a_file_is_named(tmp_path):
 # -- channels -------------------------------------------------------------------------------
 
 
-def test_multi_channel_file_needs_a_channel(shared_records, tmp_path, capsys):
+def test_multi_channel_file_needs_a_channel(sample_records, tmp_path, capsys):
     """`records show` silently took the first channel; `simulate` had no --channel."""
-    v2 = shared_records / "formats/dmg/CE89146.V2"
+    v2 = sample_records / "formats/dmg/CE89146.V2"
     wall = Path(__file__).parent.parent / "catalog/examples/wall12.toml"
     for argv in (["records", "show", v2], ["records", "plot", v2, "--out", tmp_path / "a.png"],
                  ["simulate", wall, v2]):
@@ -392,8 +392,8 @@ def test_load_takes_a_channel(records_dir):
 # -- describe: one channel of one file with its provenance ----------------------------------
 
 
-def test_describe_a_record_file(shared_records, monkeypatch):
-    src = shared_records / "formats/peer/RSN763_LOMAP_GIL067.AT2"
+def test_describe_a_record_file(sample_records, monkeypatch):
+    src = sample_records / "formats/peer/RSN763_LOMAP_GIL067.AT2"
     reads = []
     real = Path.read_bytes
     monkeypatch.setattr(Path, "read_bytes", lambda self: reads.append(self) or real(self))
@@ -408,12 +408,12 @@ def test_describe_a_record_file(shared_records, monkeypatch):
     assert not rf.data.flags.writeable and rf.trace().stats.delta == 0.005
     with pytest.raises(AttributeError):
         rf.dt = 0.01  # frozen
-    v2a = shared_records / "formats/geonet/20161113_110259_WTMC_20.V2A"
+    v2a = sample_records / "formats/geonet/20161113_110259_WTMC_20.V2A"
     with pytest.raises(R.ChannelError, match=r"holds 3 channels \(N28W, S62W, UP\)"):
         R.describe(v2a)
     s62w = R.describe(v2a, channel="S62W")
     assert (s62w.channel, s62w.unit, s62w.dt, s62w.npts) == ("S62W", "mm/s2", 0.02, 8192)
-    plain = R.describe(shared_records / "elcentro1940/elcentro_S00E_1940.dat", dt=0.02,
+    plain = R.describe(sample_records / "elcentro1940/elcentro_S00E_1940.dat", dt=0.02,
                        unit="cm/s2")
     assert (plain.format, plain.unit, plain.npts) == ("columns", "cm/s2", 2688)
     assert plain.pga_g == pytest.approx(0.3484, abs=5e-5)
@@ -423,15 +423,15 @@ def test_describe_a_record_file(shared_records, monkeypatch):
 
 
 @pytest.fixture
-def suite(shared_records, tmp_path) -> Path:
+def suite(sample_records, tmp_path) -> Path:
     folder = tmp_path / "suite"
     (folder / "plain").mkdir(parents=True)
     for name in ("formats/peer/RSN763_LOMAP_GIL067.AT2",
                  "formats/geonet/20161113_110259_WTMC_20.V2A",
                  "formats/geonet/20161113_110259_WTMC_20.V1A"):
-        shutil.copy(shared_records / name, folder)
-    shutil.copy(shared_records / "elcentro1940/elcentro_S00E_1940.dat", folder / "plain")
-    shutil.copy(shared_records / "elcentro1940/elcentro_S00E_1940.dat",
+        shutil.copy(sample_records / name, folder)
+    shutil.copy(sample_records / "elcentro1940/elcentro_S00E_1940.dat", folder / "plain")
+    shutil.copy(sample_records / "elcentro1940/elcentro_S00E_1940.dat",
                 folder / "plain" / "elcentro.dat")  # an id of records/manifest.toml
     (folder / "README.md").write_text("My suite\n")
     from obspy import Trace

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -13,12 +15,13 @@ import urmx.records as R
 from urmx import UrmxWarning
 from urmx.config import shipped_records
 
+from .fixtures.records import record_file
 from .helpers.synthetic import at2_rows, at2_text
 
 G_N = 9.80665  # standard gravity g_n [m s-2] (records in units of g)
 
 
-# -- the shared collection's format samples, against its PROVENANCE.md ---------------
+# -- the shipped records and format samples, against PROVENANCE.md ----------------------
 # (file, read kwargs, channel, dt [s], npts, PGA [g] from PROVENANCE.md)
 PROVENANCE = [
     ("elcentro1940/elcentro_S00E_1940.dat", {"dt": 0.02, "unit": "cm/s2"}, "", 0.02, 2688,
@@ -61,8 +64,8 @@ PROVENANCE = [
 
 @pytest.mark.parametrize(("file", "kwargs", "channel", "dt", "npts", "pga_g"), PROVENANCE,
                          ids=[f"{p[0].split('/')[-1]}-{p[2]}" for p in PROVENANCE])
-def test_reads_provenance_record(shared_records, file, kwargs, channel, dt, npts, pga_g):
-    st = R.read(shared_records / file, **kwargs)
+def test_reads_provenance_record(file, kwargs, channel, dt, npts, pga_g):
+    st = R.read(record_file(file), **kwargs)
     tr = st.select(channel=channel)[0] if channel else st[0]
     assert tr.stats.delta == pytest.approx(dt, rel=1e-9)
     assert tr.stats.npts == npts
@@ -71,13 +74,35 @@ def test_reads_provenance_record(shared_records, file, kwargs, channel, dt, npts
     assert tr.stats.processing[0].startswith("urmx.records.read")
 
 
+def test_knet_file_of_known_counts(tmp_path):
+    """The K-NET/KiK-net reader on a synthetic file (the NIED samples are not shipped):
+    counts x scale factor in gal, mean removed, to m/s2, at the stated sampling rate; the
+    header's peak is the record's; the format is detected from the text."""
+    from urmx.records import readers
+
+    from .helpers.synthetic import knet_text
+
+    t = np.arange(1203) * 0.01
+    counts = np.round(-12000 + 4000 * np.sin(2 * np.pi * 1.5 * t) * np.exp(-t)).astype(int)
+    gal = (counts - counts.mean()) * 3920 / 6182761
+    path = tmp_path / "SYN0010001010000.NS"
+    path.write_text(knet_text(counts, direction="N-S", max_acc_gal=np.abs(gal).max()),
+                    encoding="ascii")
+    assert readers.detect_format(path) == "knet"
+    (tr,) = R.read(path)
+    assert (tr.stats.channel, tr.stats.delta, tr.stats.npts) == ("NS", 0.01, 1203)
+    assert tr.stats.units == "m/s2"
+    np.testing.assert_allclose(tr.data, gal * 0.01, rtol=0, atol=1e-15)
+    assert tr.stats.record.header_pga == pytest.approx(np.abs(gal).max() * 0.01, abs=5e-6)
+
+
 @pytest.mark.parametrize("file", ["formats/peer/RSN763_LOMAP_GIL067.AT2",
                                   "formats/geonet/20161113_110259_WTMC_20.V2A",
                                   "formats/dmg/CE89146.V2", "formats/smc/0111a.smc",
                                   "formats/usc/017m30bt.s0a"])
-def test_pga_matches_header(shared_records, file):
+def test_pga_matches_header(sample_records, file):
     """Headers that state a peak agree with the data (AT2: PROVENANCE, no header peak)."""
-    for tr in R.read(shared_records / file):
+    for tr in R.read(sample_records / file):
         pga = np.abs(tr.data).max()
         header = tr.stats.record.header_pga
         if header is None:  # PEER AT2 headers carry no peak
@@ -92,9 +117,9 @@ def test_pga_matches_header(shared_records, file):
     ("formats/smc/891018_1.sma-1.0444a.smc", "065", 0.001, 0.0818),
     ("formats/usc/017m30cc.y0a", "N00W", 0.004, 0.4064),
 ])
-def test_uneven_records_resampled_with_warning(shared_records, file, channel, dt, pga_g):
+def test_uneven_records_resampled_with_warning(sample_records, file, channel, dt, pga_g):
     with pytest.warns(UrmxWarning, match="unevenly sampled"):
-        st = R.read(shared_records / file)
+        st = R.read(sample_records / file)
     tr = st.select(channel=channel)[0]
     assert tr.stats.delta == dt
     assert np.abs(tr.data).max() / G_N == pytest.approx(pga_g, rel=0.02)
@@ -112,9 +137,9 @@ def test_penzien_el_centro_comment_count_warns(records_dir):
     ("formats/cosmos/NP8040-n.1000hyfh.HNE.01.V0c", "raw digitiser counts"),
     ("formats/dmg/CE89146.V3", "spectra, no acceleration history"),
 ])
-def test_refused_files(shared_records, file, match):
+def test_refused_files(sample_records, file, match):
     with pytest.raises(R.UnsupportedRecordError, match=match) as err:
-        R.read(shared_records / file)
+        R.read(sample_records / file)
     assert Path(file).name in str(err.value)
 
 
@@ -158,10 +183,10 @@ def test_clear_errors(at2, make_kwargs, read_kwargs, error, match):
     assert str(path) in str(err.value)
 
 
-def test_truncated_real_files(shared_records, tmp_path):
+def test_truncated_real_files(sample_records, tmp_path):
     for name in ("formats/peer/RSN763_LOMAP_GIL067.AT2",
                  "formats/geonet/20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2"):
-        lines = (shared_records / name).read_bytes().splitlines(keepends=True)
+        lines = (sample_records / name).read_bytes().splitlines(keepends=True)
         cut = tmp_path / Path(name).name
         cut.write_bytes(b"".join(lines[: len(lines) // 2 + 7]))
         with pytest.raises(R.RecordError, match=str(cut)):
@@ -353,9 +378,10 @@ def test_a_manifest_is_parsed_once_while_its_file_stays_the_same(tmp_path, monke
 
 
 def test_shipped_records_are_the_manifests():
-    """Every file of the shipped records folder is a record file of the manifest with its
-    SHA-256 (or one of the folder's own documents), and PROVENANCE.md lists each with that
-    SHA-256: the records travel with their attribution."""
+    """Every file of the shipped records folder but the format samples (their own test
+    follows) is a record file of the manifest with its SHA-256 (or one of the folder's own
+    documents), and PROVENANCE.md lists each with that SHA-256: the records travel with
+    their attribution."""
     import hashlib
 
     folder = shipped_records()
@@ -363,12 +389,108 @@ def test_shipped_records_are_the_manifests():
     by_file = {e["file"]: e["sha256"] for e in entries.values()}
     provenance = (folder / "PROVENANCE.md").read_text(encoding="utf-8")
     own = {"manifest.toml", "PROVENANCE.md", "INGEST.md", "library/catalog.tsv"}
-    files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+    files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file()
+                   and not p.relative_to(folder).as_posix().startswith("formats/"))
     assert set(files) - own == set(by_file)  # no file without a record, no record without
     for rel, digest in by_file.items():
         assert hashlib.sha256((folder / rel).read_bytes()).hexdigest() == digest, rel
         assert f"| `{rel}` |" in provenance and f"`{digest}`" in provenance, rel
     assert len(by_file) == 47 and sum((folder / f).stat().st_size for f in by_file) < 4.5e6
+
+
+def shipped_samples() -> list[dict]:
+    """The format samples' manifest (``records/formats/manifest.toml``)."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+    text = (shipped_records() / "formats" / "manifest.toml").read_text(encoding="utf-8")
+    return tomllib.loads(text)["sample"]
+
+
+def samples_problems(folder: Path, samples: list[dict]) -> list[str]:
+    """What is wrong with the format samples of a records folder against their manifest:
+    a file without an entry or an entry without its file, a SHA-256 that differs, a file
+    PROVENANCE.md does not list with that SHA-256, a file urmx reads as another format, or
+    reads where the manifest says it refuses it (or the other way round)."""
+    from urmx.records import readers
+
+    problems = []
+    rows = {}
+    for line in (folder / "PROVENANCE.md").read_text(encoding="utf-8").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.startswith("| `formats/") and len(cells) > 2:
+            rows[cells[0].strip("`")] = cells[-1].strip("`")
+    listed = {s["file"] for s in samples}
+    found = {p.relative_to(folder).as_posix() for p in (folder / "formats").rglob("*")
+             if p.is_file()} - {"formats/manifest.toml"}
+    problems += [f"{f}: no entry" for f in sorted(found - listed)]
+    problems += [f"{f}: no file" for f in sorted(listed - found)]
+    for s in samples:
+        path = folder / s["file"]
+        if not path.is_file():
+            continue
+        if hashlib.sha256(path.read_bytes()).hexdigest() != s["sha256"]:
+            problems.append(f"{s['file']}: sha256 differs")
+        if rows.get(s["file"]) != s["sha256"]:
+            problems.append(f"{s['file']}: its PROVENANCE.md row lacks its sha256")
+        try:
+            outcome = readers.detect_format(path)
+            with warnings.catch_warnings():  # (the film records are resampled: said)
+                warnings.simplefilter("ignore", UrmxWarning)
+                R.read(path, allow_unusual=True)
+        except readers.UnsupportedRecordError:
+            outcome = "refused"
+        except R.RecordError as exc:
+            outcome = f"an error ({exc})"
+        expected = s["format"] if s["reads"] else "refused"
+        if outcome != expected:
+            problems.append(f"{s['file']}: urmx gives {outcome}, manifest {expected}")
+    return problems
+
+
+def test_shipped_format_samples_are_their_manifests(tmp_path):
+    """The 13 reader-format samples ship in ``records/formats`` (a clone runs the readers'
+    tests alone; the K-NET and KiK-net ones do not ship, NIED's terms): each is in its
+    manifest with its SHA-256, in its own row of PROVENANCE.md with that SHA-256, and read
+    as the manifest's format (two refused: raw counts, spectra). The check finds a changed
+    byte, a stray file, a missing file, a row with another SHA-256 and a wrong format."""
+    samples = shipped_samples()
+    assert len(samples) == 13
+    assert {s["format"] for s in samples} == {"peer", "geonet", "cosmos", "dmg", "smc"}
+    assert not (shipped_records() / "formats" / "knet").exists()
+    assert [s["file"] for s in samples if not s["reads"]] == [
+        "formats/cosmos/NP8040-n.1000hyfh.HNE.01.V0c", "formats/dmg/CE89146.V3"]
+    assert samples_problems(shipped_records(), samples) == []
+    bad = tmp_path / "records"
+    shutil.copytree(shipped_records(), bad)
+    target = bad / samples[0]["file"]
+    data = bytearray(target.read_bytes())
+    last = max(i for i, b in enumerate(data) if chr(b).isdigit())  # still a number
+    data[last] = ord("5") if data[last] != ord("5") else ord("6")
+    target.write_bytes(bytes(data))
+    (bad / "formats" / "peer" / "stray.AT2").write_text("x", encoding="utf-8")
+    (bad / "formats" / "peer" / "manifest.toml").write_text("", encoding="utf-8")
+    gone = bad / "formats" / "usc" / "017m30bt.s0a"
+    gone.unlink()
+    provenance = bad / "PROVENANCE.md"
+    text = provenance.read_text(encoding="utf-8")
+    sha = {s["file"]: s["sha256"] for s in samples}
+    v2a, v1a = (sha[f"formats/geonet/20161113_110259_WTMC_20.{e}"] for e in ("V2A", "V1A"))
+    row = next(ln for ln in text.splitlines() if ln.startswith("| `formats/geonet/") and
+               ln.rstrip().endswith(f"`{v2a}` |"))
+    provenance.write_text(text.replace(row, row.replace(v2a, v1a)), encoding="utf-8")
+    wrong = [dict(s, format="geonet") if s["format"] == "smc" else
+             dict(s, reads=True) if s["file"].endswith(".V3") else s for s in samples]
+    assert samples_problems(bad, wrong) == [
+        "formats/peer/manifest.toml: no entry",
+        "formats/peer/stray.AT2: no entry",
+        "formats/usc/017m30bt.s0a: no file",
+        f"{samples[0]['file']}: sha256 differs",
+        "formats/geonet/20161113_110259_WTMC_20.V2A: its PROVENANCE.md row lacks its sha256",
+        "formats/dmg/CE89146.V3: urmx gives refused, manifest dmg",
+        "formats/smc/0111a.smc: urmx gives smc, manifest geonet",
+        "formats/smc/891018_1.sma-1.0444a.smc: urmx gives smc, manifest geonet"]
 
 
 def test_library_against_catalog(records_dir):
@@ -388,7 +510,7 @@ def test_library_against_catalog(records_dir):
 # -- command line -------------------------------------------------------------------------
 
 
-def test_cli(records_dir, shared_records, tmp_path, capsys):
+def test_cli(records_dir, sample_records, tmp_path, capsys):
     from urmx.cli import main
 
     assert main(["records", "--records", str(records_dir), "list", "--set", "paper"]) == 0
@@ -396,7 +518,7 @@ def test_cli(records_dir, shared_records, tmp_path, capsys):
     assert main(["records", "--records", str(records_dir), "show", "elcentro"]) == 0
     out = capsys.readouterr().out
     assert "arias_intensity" in out and "0.3484 g" in out
-    assert main(["records", "show", str(shared_records / "formats/dmg/CE89146.V3")]) == 2
+    assert main(["records", "show", str(sample_records / "formats/dmg/CE89146.V3")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "CE89146.V3" in err and "Traceback" not in err
     png = tmp_path / "nahanni.png"
@@ -413,13 +535,13 @@ def test_plot_has_three_panels(records_dir):
     assert fig.axes[1].get_xlabel() == "frequency [Hz]"
 
 
-def test_read_copy_elsewhere_detects_format_from_content(shared_records, tmp_path):
+def test_read_copy_elsewhere_detects_format_from_content(sample_records, tmp_path):
     """The file name carries no hint: the content decides."""
     for src in ("formats/peer/RSN763_LOMAP_GIL067.AT2", "formats/geonet/"
                 "20161113_110259_WTMC_20.V2A", "formats/dmg/CE89146.V2", "formats/smc/0111a.smc"):
         dst = tmp_path / "record.bin"
-        shutil.copy(shared_records / src, dst)
-        assert R.detect_format(dst) == R.detect_format(shared_records / src)
+        shutil.copy(sample_records / src, dst)
+        assert R.detect_format(dst) == R.detect_format(sample_records / src)
         assert len(R.read(dst)) >= 1
 
 

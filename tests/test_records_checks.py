@@ -367,8 +367,8 @@ def test_format_says_what_sniffing_cannot(records_dir, tmp_path, capsys):
     assert "--format and --response apply to record files" in capsys.readouterr().err
 
 
-def test_cosmos_velocity_units_are_refused(shared_records, tmp_path):
-    src = shared_records / "formats/cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c"
+def test_cosmos_velocity_units_are_refused(sample_records, tmp_path):
+    src = sample_records / "formats/cosmos/us1000hyfh_akbmrp_AKBMR--n.1000hyfh.BNZ.--.acc.V2c"
     text = src.read_text(encoding="latin-1")
     assert R.read(src)[0].stats.channel == "BNZ"
     odd = tmp_path / "vel.V2c"

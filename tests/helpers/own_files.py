@@ -1,5 +1,5 @@
 """A study on record files of one's own, beside the study file (`tests/test_study_file.py`,
-`tests/test_cells.py`): three format samples of the shared records folder (`AT2`, `V2A`,
+`tests/test_cells.py`): three record files of the folder of the format samples (`AT2`, `V2A`,
 `PLAIN`, paths inside it) and `OWN_FILES`, a study file that reads them from ``data/``."""
 
 AT2 = "formats/peer/RSN763_LOMAP_GIL067.AT2"

@@ -55,3 +55,26 @@ def at2_text(rows: str = AT2_ROWS, *, title: str = AT2_TITLE, unit: str = "G", n
     line = f"NPTS=  {npts}, DT=   {dt} SEC" if npts_line is None else npts_line
     return (f"PEER NGA STRONG MOTION DATABASE RECORD\n{title}\n"
             f"ACCELERATION TIME SERIES IN UNITS OF {unit}\n{line}\n{rows}")
+
+
+def knet_text(counts, *, scale: tuple[int, int] = (3920, 6182761), freq_hz: int = 100,
+              direction: str = "E-W", max_acc_gal: float = 0.0) -> str:
+    """A K-NET ASCII record's text (NIED's format: 17 header lines, then the integer counts
+    eight a line), with the fields ObsPy's K-NET reader and urmx read set from the
+    arguments and made-up station and event fields. The K-NET and KiK-net samples are not
+    shipped (NIED's data policy forbids passing their files on), so a clone tests its
+    reader on this."""
+    counts = [int(c) for c in counts]
+    header = [("Origin Time", "2000/01/01 00:00:00"), ("Lat.", "35.0"), ("Long.", "139.0"),
+              ("Depth. (km)", "10"), ("Mag.", "5.0"), ("Station Code", "SYN001"),
+              ("Station Lat.", "35.1"), ("Station Long.", "139.1"),
+              ("Station Height(m)", "10"), ("Record Time", "2000/01/01 00:00:05"),
+              ("Sampling Freq(Hz)", f"{freq_hz}Hz"),
+              ("Duration Time(s)", str(len(counts) // freq_hz)), ("Dir.", direction),
+              ("Scale Factor", f"{scale[0]}(gal)/{scale[1]}"),
+              ("Max. Acc. (gal)", f"{max_acc_gal:.3f}"),
+              ("Last Correction", "2000/01/01 00:00:05"), ("Memo.", "")]
+    lines = [f"{name:<18}{value}" for name, value in header]
+    lines += ["".join(f"{c:>9}" for c in counts[i:i + 8]) + " "
+              for i in range(0, len(counts), 8)]
+    return "\n".join(lines) + "\n"

@@ -26,7 +26,7 @@ def records_dir() -> Path:
 @pytest.fixture(scope="session")
 def sample_records() -> Path:
     """The records folder that holds the reader-format samples (the shipped records,
-    ``records/formats``; else ``$URMX_RECORDS`` if it does); missing, it fails the
+    ``records/formats``); missing, it fails the
     test under CI and skips it elsewhere."""
     return samples_folder()
 
